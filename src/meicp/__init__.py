@@ -1,0 +1,14 @@
+"""meicp: stability of layered elastic lattices in frictional contact.
+
+Mixed eigenvalue complementarity problems (MEiCP) and linear complementarity problems
+(LCP) on distributed PETSc matrices with SLEPc eigensolvers.  See ``DESIGN.md`` in the
+shared notes and the README for the public API.
+"""
+
+__version__ = "0.1.0"
+
+from .core.errors import ConvergenceError, MeicpError, ProblemError, SolverNotFound  # noqa: E402
+from .core.results import Result  # noqa: E402
+from .core import validation  # noqa: E402,F401
+
+__all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result"]

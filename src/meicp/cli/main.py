@@ -1,0 +1,109 @@
+"""``meicp`` entry point.
+
+Everything after ``--`` goes to the PETSc options database (and wins over code defaults
+and the scene's ``[petsc]`` table).  Errors are printed once, on rank 0 when every rank
+failed alike; a failure on some ranks only ends the whole run with ``MPI_Abort`` after a
+short grace period, so a 2-rank run never hangs.
+
+Exit codes: 0 success, 1 solver failure (no certified answer), 2 bad input or usage,
+3 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ..core.errors import ConvergenceError, MeicpError, ProblemError
+from ..core.log import configure_logging, rank0_print, world_rank
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+#: seconds a failing rank waits for the others to fail alike before aborting the job
+GRACE_SECONDS = 3.0
+
+
+def _cmd_info(args) -> int:
+    from ..info import collect, format_report
+
+    report = collect()
+    rank0_print(format_report(report))
+    if args.check:
+        from mpi4py import MPI
+
+        from ..petsc.selfcheck import ghep_selfcheck
+
+        r = ghep_selfcheck(MPI.COMM_WORLD)
+        ok = r["max_rel_error"] < 1e-10 and r["max_residual"] < 1e-8
+        rank0_print(
+            f"\nself-check: {len(r['slepc'])} smallest eigenvalues of a "
+            f"{r['n']}-DOF pencil, SLEPc on {r['ranks']} rank(s) vs SciPy eigh: "
+            f"max relative error {r['max_rel_error']:.2e}, SLEPc residual {r['max_residual']:.2e}, "
+            f"solve {r['solve_s'] * 1e3:.1f} ms -> {'OK' if ok else 'FAILED'}")
+        return EXIT_OK if ok else EXIT_FAILED
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="meicp",
+        description="Stability of layered elastic lattices in frictional contact (MEiCP/LCP on PETSc/SLEPc).",
+        epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -eps_view")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    p = sub.add_parser("info", help="versions of Python, NumPy, PETSc, SLEPc, MPI, h5py; MPI ranks")
+    p.add_argument("--check", action="store_true",
+                   help="also solve a small distributed eigenproblem and compare it with SciPy")
+    p.set_defaults(run=_cmd_info)
+    return parser
+
+
+def _split_petsc_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    if "--" in argv:
+        k = argv.index("--")
+        return argv[:k], argv[k + 1:]
+    return argv, []
+
+
+def _all_ranks_failed() -> bool:
+    """True when every rank reaches this point within the grace period (a collective error)."""
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is None or not mpi.Is_initialized() or mpi.COMM_WORLD.Get_size() == 1:
+        return True
+    request = mpi.COMM_WORLD.Ibarrier()
+    deadline = time.monotonic() + GRACE_SECONDS
+    while time.monotonic() < deadline:
+        if request.Test():
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    own, petsc_args = _split_petsc_args(argv)
+    args = build_parser().parse_args(own)
+    configure_logging(args.verbose)
+    from ..petsc import init
+
+    init(petsc_args)
+    try:
+        return args.run(args)
+    except ProblemError as exc:
+        code, text = EXIT_BAD_INPUT, f"meicp: error: {exc}"
+    except ConvergenceError as exc:
+        code, text = EXIT_FAILED, f"meicp: failed: {exc}"
+    except MeicpError as exc:
+        code, text = EXIT_FAILED, f"meicp: {exc}"
+    except Exception as exc:  # noqa: BLE001 - last resort: report, never hang the other ranks
+        import traceback
+
+        traceback.print_exc()
+        code, text = EXIT_INTERNAL, f"meicp: internal error: {type(exc).__name__}: {exc}"
+    if _all_ranks_failed():
+        rank0_print(text, file=sys.stderr)
+        return code
+    print(f"[rank {world_rank()}] {text}", file=sys.stderr, flush=True)
+    sys.modules["mpi4py.MPI"].COMM_WORLD.Abort(code)
+    return code  # not reached

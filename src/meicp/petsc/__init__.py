@@ -1,0 +1,85 @@
+"""The PETSc/SLEPc layer: the only place that imports petsc4py and slepc4py.
+
+Debian installs petsc4py/slepc4py under ``/usr/lib/petscdir/...`` and ``/usr/lib/slepcdir/...``
+rather than on the default ``sys.path`` (DESIGN §6).  :func:`import_petsc` finds them, so
+users need no ``PETSC_DIR``; ``make setup`` also writes a ``.pth`` file into the venv
+with the same paths so that a bare ``import petsc4py`` works there.
+
+:func:`import_petsc` initialises PETSc with the command-line options given to
+:func:`init` (the CLI passes what follows ``--``); call :func:`init` before the first use.
+"""
+
+from __future__ import annotations
+
+import glob
+import sys
+
+_ARGV: list[str] = []
+
+
+def debian_paths() -> list[str]:
+    """The site directories of Debian's real-scalar petsc4py and slepc4py, newest first."""
+    paths = []
+    for pattern in ("/usr/lib/petscdir/petsc3.*/*-real/lib/python3/dist-packages",
+                    "/usr/lib/slepcdir/slepc3.*/*-real/lib/python3/dist-packages"):
+        found = sorted(glob.glob(pattern), reverse=True)
+        if found:
+            paths.append(found[0])
+    return paths
+
+
+def _ensure_on_path() -> None:
+    try:
+        import petsc4py  # noqa: F401
+        import slepc4py  # noqa: F401
+        return
+    except ImportError:
+        pass
+    for p in debian_paths():
+        if p not in sys.path:
+            sys.path.append(p)
+
+
+def init(argv: list[str] | None = None) -> None:
+    """Record PETSc command-line options; effective only before PETSc is first imported."""
+    global _ARGV
+    _ARGV = list(argv or [])
+    if "petsc4py.PETSc" in sys.modules and _ARGV:
+        # too late for petsc4py.init; insert into the live database instead (same precedence)
+        sys.modules["petsc4py.PETSc"].Options().insertString(" ".join(_ARGV))
+
+
+def import_petsc():
+    """Return the ``PETSc`` module, initialising PETSc and SLEPc with the options given to
+    :func:`init` (SLEPc is initialised with PETSc so that the order of first use is irrelevant)."""
+    if "petsc4py.PETSc" not in sys.modules:
+        _ensure_on_path()
+        import slepc4py
+        slepc4py.init([sys.argv[0] if sys.argv else "meicp"] + _ARGV)
+    from petsc4py import PETSc
+    return PETSc
+
+
+def import_slepc():
+    """Return the ``SLEPc`` module (initialised together with PETSc)."""
+    import_petsc()
+    from slepc4py import SLEPc
+    return SLEPc
+
+
+def comm_size(comm) -> int:
+    """Size of an mpi4py or PETSc communicator; 1 for ``None``."""
+    if comm is None:
+        return 1
+    return comm.getSize() if hasattr(comm, "getSize") else comm.Get_size()
+
+
+def to_petsc_comm(comm):
+    """A PETSc communicator from ``None`` (self), an mpi4py or a PETSc communicator."""
+    PETSc = import_petsc()
+    if comm is None:
+        return PETSc.COMM_SELF
+    if isinstance(comm, PETSc.Comm):
+        return comm
+    return PETSc.Comm(comm)
+

@@ -1,0 +1,36 @@
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+
+
+def clean_env() -> dict:
+    """The environment for a child ``mpirun``: no inherited MPI singleton state."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
+    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1")
+    return env
+
+
+def run(args, timeout=120, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run(args, capture_output=True, text=True, timeout=timeout, env=clean_env(),
+                          cwd=ROOT, **kw)
+
+
+def meicp_cmd() -> list:
+    return [sys.executable, "-m", "meicp"]
+
+
+def mpirun(n: int = 2) -> list:
+    return ["mpirun", "-n", str(n), "--oversubscribe"]
+
+
+@pytest.fixture
+def comm():
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD
