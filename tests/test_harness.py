@@ -163,7 +163,8 @@ def test_cli_error_on_one_rank_aborts_and_collective_error_prints_once(tmp_path)
         "        raise ProblemError('layers[1].density must be positive')\n"
         "    MPI.COMM_WORLD.Barrier()\n"
         "    return 0\n"
-        "m._cmd_info = fail\n"
+        "import meicp.cli.info as info\n"
+        "info.run = fail\n"
         "sys.exit(m.main(['info']))\n")
     out = run(mpirun(2) + [meicp_cmd()[0], str(script), "all"], timeout=60)
     assert out.returncode == 2, out.stderr

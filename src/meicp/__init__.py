@@ -10,5 +10,6 @@ __version__ = "0.1.0"
 from .core.errors import ConvergenceError, MeicpError, ProblemError, SolverNotFound  # noqa: E402
 from .core.results import Result  # noqa: E402
 from .core import validation  # noqa: E402,F401
+from .lcp import LCPResult, solve_lcp  # noqa: E402
 
-__all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result"]
+__all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult"]

@@ -23,27 +23,6 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 GRACE_SECONDS = 3.0
 
 
-def _cmd_info(args) -> int:
-    from ..info import collect, format_report
-
-    report = collect()
-    rank0_print(format_report(report))
-    if args.check:
-        from mpi4py import MPI
-
-        from ..petsc.selfcheck import ghep_selfcheck
-
-        r = ghep_selfcheck(MPI.COMM_WORLD)
-        ok = r["max_rel_error"] < 1e-10 and r["max_residual"] < 1e-8
-        rank0_print(
-            f"\nself-check: {len(r['slepc'])} smallest eigenvalues of a "
-            f"{r['n']}-DOF pencil, SLEPc on {r['ranks']} rank(s) vs SciPy eigh: "
-            f"max relative error {r['max_rel_error']:.2e}, SLEPc residual {r['max_residual']:.2e}, "
-            f"solve {r['solve_s'] * 1e3:.1f} ms -> {'OK' if ok else 'FAILED'}")
-        return EXIT_OK if ok else EXIT_FAILED
-    return EXIT_OK
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="meicp",
@@ -51,11 +30,10 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -eps_view")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-
-    p = sub.add_parser("info", help="versions of Python, NumPy, PETSc, SLEPc, MPI, h5py; MPI ranks")
-    p.add_argument("--check", action="store_true",
-                   help="also solve a small distributed eigenproblem and compare it with SciPy")
-    p.set_defaults(run=_cmd_info)
+    # each subcommand lives in its own module with register(subparsers)
+    from . import info, lcp
+    for module in (info, lcp):
+        module.register(sub)
     return parser
 
 

@@ -1,0 +1,6 @@
+"""Linear complementarity problems: solvers, matrix classes and game value (DESIGN §2)."""
+
+from .problem import LCPProblem, LCPResult
+from .solve import available_methods, solve_lcp
+
+__all__ = ["LCPProblem", "LCPResult", "available_methods", "solve_lcp"]

@@ -1,0 +1,74 @@
+"""``meicp lcp FILE`` and ``meicp classify FILE``: Siconos ``.dat`` or HDF5 (``M``, ``q``)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ..core.log import rank0_print
+from .main import EXIT_FAILED, EXIT_OK
+
+
+def register(sub) -> None:
+    from ..lcp.solve import available_methods
+
+    p = sub.add_parser("lcp", help="solve LCP(q, M) from a Siconos .dat or an HDF5 file (M, q)")
+    p.add_argument("file")
+    p.add_argument("--method", default="auto", choices=available_methods())
+    p.add_argument("--tol", type=float, default=1e-10, help="relative certificate tolerance")
+    p.add_argument("--all", action="store_true", help="every solution (support enumeration, small n)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(run=run_lcp)
+
+    p = sub.add_parser("classify", help="matrix classes of M (P, Q, R0, Z, copositive, ...) and game value")
+    p.add_argument("file")
+    p.add_argument("--exact-limit", type=int, default=12, help="largest n for the exponential exact tests")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(run=run_classify)
+
+
+def _vector(x):
+    return None if x is None else [float(v) for v in x]
+
+
+def run_lcp(args) -> int:
+    from ..io.lcp_files import read_problem
+    from ..lcp.solve import solve_lcp
+
+    data = read_problem(args.file)
+    if "q" not in data:
+        from ..core.errors import ProblemError
+
+        raise ProblemError(f"{args.file}: no dataset 'q'")
+    method = "enumerate" if args.all else args.method
+    r = solve_lcp(data["M"], data["q"], method=method, tol=args.tol)
+    if args.json:
+        rank0_print(json.dumps({
+            "file": args.file, "n": int(np.size(data["q"])), "method": r.method, "status": r.status,
+            "success": r.success, "message": r.message, "iterations": r.iterations,
+            "residual": r.residual, "min_x": r.min_x, "min_w": r.min_w,
+            "complementarity": r.complementarity, "x": _vector(r.x), "w": _vector(r.w),
+            "solutions": [_vector(s) for s in r.solutions], "attempts": r.attempts,
+            "timings": r.timings}, indent=2))
+    else:
+        rank0_print(f"LCP from {args.file}: n = {np.size(data['q'])}")
+        for name, status, message in r.attempts:
+            rank0_print(f"  tried {name}: {status}" + (f" ({message})" if message and status != "solved" else ""))
+        rank0_print(r.summary())
+        if r.success:
+            with np.printoptions(precision=6, suppress=True, linewidth=100):
+                for k, s in enumerate(r.solutions):
+                    rank0_print(f"x{'' if len(r.solutions) == 1 else f'[{k}]'} = {s}")
+                rank0_print(f"w = {r.w}")
+    return EXIT_OK if r.success or r.status == "infeasible" else EXIT_FAILED
+
+
+def run_classify(args) -> int:
+    from ..io.lcp_files import read_problem
+    from ..lcp.classes import classify
+
+    data = read_problem(args.file)
+    c = classify(data["M"], exact_limit=args.exact_limit)
+    rank0_print(json.dumps(c.to_dict(), indent=2, default=float) if args.json else c.report())
+    return EXIT_OK

@@ -1,0 +1,187 @@
+"""The LCP, its result and its certificate.
+
+LCP(q, M): find ``x ≥ 0`` with ``w = Mx + q ≥ 0`` and ``xᵀw = 0`` (DESIGN §2).
+
+Certificate (relative, so that it means the same at any scale of the data): with
+``sx = max|x|`` and ``sw = max(max|q|, max|M|·max|x|)``,
+
+    residual = max( max(0, -min x) / sx,  max(0, -min w) / sw,  max_i |x_i w_i| / (sx·sw) )
+
+It is recomputed from ``M`` and ``q`` by :func:`certify`, never taken from a solver's own
+bookkeeping; a result is ``solved`` only if ``residual ≤ tol``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..core.results import SOLVED, Result
+from ..core.validation import as_matrix, as_vector
+
+#: default relative certificate tolerance
+DEFAULT_TOL = 1e-10
+
+
+@dataclass(frozen=True)
+class LCPProblem:
+    """A validated LCP: ``M`` (ndarray or CSR), ``q`` (float64 vector)."""
+
+    M: object
+    q: np.ndarray
+
+    @classmethod
+    def from_data(cls, M, q) -> "LCPProblem":
+        """Validate ``M`` (ndarray, SciPy sparse or PETSc Mat) and ``q`` (NumPy, full length)."""
+        if _is_petsc_mat(M):
+            from ..petsc.lcp import check_petsc_matrix
+
+            check_petsc_matrix(M)
+            return cls(M, as_vector(q, M.getSize()[0], "q"))
+        M = as_matrix(M, "M")
+        return cls(M, as_vector(q, M.shape[0], "q"))
+
+    @property
+    def distributed(self) -> bool:
+        """True for a PETSc Mat: products and scales are then collective."""
+        return _is_petsc_mat(self.M)
+
+    def matvec(self, x: np.ndarray) -> np.ndarray:
+        if self.distributed:
+            from ..petsc.lcp import matvec
+
+            return matvec(self.M, x)
+        return self.M @ x
+
+    @property
+    def n(self) -> int:
+        return self.q.shape[0]
+
+    @property
+    def sparse(self) -> bool:
+        return sp.issparse(self.M)
+
+    @property
+    def matrix_scale(self) -> float:
+        if self.distributed:
+            from ..petsc.lcp import max_abs_entry
+
+            return max_abs_entry(self.M)
+        data = self.M.data if self.sparse else self.M
+        return float(np.max(np.abs(data))) if data.size else 0.0
+
+    def dense(self) -> np.ndarray:
+        if self.distributed:
+            from ..petsc.mat import mat_to_scipy
+
+            return mat_to_scipy(self.M).toarray()
+        return self.M.toarray() if self.sparse else self.M
+
+    def scipy(self):
+        """M as a SciPy CSR or ndarray (gathered on every rank when distributed)."""
+        if self.distributed:
+            from ..petsc.mat import mat_to_scipy
+
+            return mat_to_scipy(self.M)
+        return self.M
+
+
+def _is_petsc_mat(M) -> bool:
+    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
+
+
+@dataclass
+class LCPResult(Result):
+    """Result of :func:`meicp.solve_lcp`.
+
+    x, w: the solution and ``w = Mx + q`` (recomputed); ``None`` when nothing was found.
+    method: the method that produced this result (after ``auto`` and fallbacks).
+    min_x, min_w, complementarity: the certificate's parts (``complementarity = |xᵀw|``).
+    solutions: for ``enumerate``, every solution found (list of x); otherwise ``[x]`` or [].
+    attempts: for ``auto``, the (method, status, message) of every method tried.
+    """
+
+    x: np.ndarray | None = None
+    w: np.ndarray | None = None
+    method: str = ""
+    min_x: float = float("nan")
+    min_w: float = float("nan")
+    complementarity: float = float("nan")
+    solutions: list = field(default_factory=list)
+    attempts: list = field(default_factory=list)
+
+    def summary(self) -> str:
+        head = f"{self.method}: {self.status}"
+        if self.x is not None:
+            head += (f", residual {self.residual:.2e} (min x {self.min_x:.2e}, min w {self.min_w:.2e}, "
+                     f"|xᵀw| {self.complementarity:.2e}), {self.iterations} iterations")
+        return head + (f" — {self.message}" if self.message else "")
+
+
+def relative_residual(problem: LCPProblem, x: np.ndarray) -> tuple[float, np.ndarray]:
+    """The certificate residual of ``x`` and the recomputed ``w``."""
+    w = problem.matvec(x) + problem.q
+    sx = float(np.max(np.abs(x))) if x.size else 0.0
+    sw = max(float(np.max(np.abs(problem.q))), problem.matrix_scale * sx)
+    sx = sx if sx > 0 else 1.0
+    sw = sw if sw > 0 else 1.0
+    r = max(0.0, -float(np.min(x)) / sx, -float(np.min(w)) / sw,
+            float(np.max(np.abs(x * w))) / (sx * sw))
+    return r, w
+
+
+def certify(problem: LCPProblem, result: LCPResult, x, tol: float = DEFAULT_TOL,
+            failure_status: str = "certificate_failed") -> LCPResult:
+    """Fill ``result`` with ``x``, its ``w`` and certificate; ``solved`` only if it passes.
+
+    A solver calls this with its candidate; if the candidate fails, the status becomes
+    ``failure_status`` and the message says by how much — the candidate is kept for
+    inspection but the result is not a success.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    r, w = relative_residual(problem, x)
+    result.x, result.w, result.residual = x, w, r
+    result.min_x, result.min_w = float(np.min(x)), float(np.min(w))
+    result.complementarity = abs(float(x @ w))
+    if r <= tol:
+        result.status = SOLVED
+        result.solutions = result.solutions or [x]
+    else:
+        result.status = failure_status
+        note = f"certificate residual {r:.2e} > tol {tol:.0e}"
+        result.message = f"{result.message}; {note}" if result.message else note
+    return result
+
+
+def refine_on_support(problem: LCPProblem, x: np.ndarray) -> np.ndarray | None:
+    """Re-solve ``M_SS x_S = -q_S`` on the support of ``x`` (pivoting and iterative methods
+    identify the support correctly long before their iterate is accurate).  The support is
+    where ``x_i > w_i``.  ``None`` if the block is singular or the re-solve leaves the orthant."""
+    if problem.distributed:
+        return None  # the iterative PETSc solvers are already at working accuracy
+    S = np.flatnonzero(x > problem.matvec(x) + problem.q)
+    if S.size == 0:
+        return np.zeros_like(x)
+    M = problem.M
+    try:
+        if problem.sparse:
+            import scipy.sparse.linalg as spla
+
+            xs = spla.spsolve(M[S][:, S].tocsc(), -problem.q[S])
+        else:
+            xs = np.linalg.solve(M[np.ix_(S, S)], -problem.q[S])
+    except (np.linalg.LinAlgError, RuntimeError):
+        return None
+    if not np.all(np.isfinite(xs)) or np.any(xs < 0):
+        return None
+    out = np.zeros_like(x)
+    out[S] = xs
+    return out
+
+
+def best_of(problem: LCPProblem, *candidates) -> np.ndarray:
+    """The candidate with the smallest certificate residual (``None`` entries skipped)."""
+    scored = [(relative_residual(problem, x)[0], i, x) for i, x in enumerate(candidates) if x is not None]
+    return min(scored, key=lambda t: (t[0], t[1]))[2]

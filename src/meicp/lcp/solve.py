@@ -1,0 +1,144 @@
+"""``solve_lcp``: one entry point, solvers dispatched by name (as in qpsolvers).
+
+Methods:
+- ``lemke``: complementary pivoting, dense, any M (ray termination reported).
+- ``enumerate``: every solution, n ≤ 18; proves infeasibility.
+- ``pgs``: projected Gauss–Seidel/SOR, sparse symmetric M with positive diagonal.
+- ``newton``: PETSc SNES VI, reduced-space (``vinewtonrsls``); ``snes_type="vinewtonssls"``
+  for the semismooth variant.  Any M, sparse or distributed; local convergence.
+- ``tao``: PETSc TAO bound-constrained QP (TRON), symmetric M, sparse or distributed.
+- ``auto``: picks by size, sparsity and symmetry and falls back when a method fails;
+  every attempt is recorded in ``result.attempts``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..core.errors import ProblemError, SolverNotFound
+from ..core.validation import is_symmetric
+from .enumeration import MAX_N as ENUMERATE_MAX_N
+from .enumeration import enumerate_lcp
+from .lemke import lemke
+from .pgs import pgs
+from .problem import DEFAULT_TOL, LCPProblem, LCPResult, best_of, certify, refine_on_support
+
+#: largest n for which auto uses dense pivoting on a dense matrix
+DENSE_LIMIT = 3000
+#: sparse matrices up to this size are treated as dense by auto
+SMALL = 500
+
+
+def _petsc_method(kind: str):
+    def run(problem: LCPProblem, *, tol: float = DEFAULT_TOL, comm=None, options=None,
+            max_iter: int | None = None, snes_type: str = "vinewtonrsls", tao_type: str = "tron",
+            **_ignored) -> LCPResult:
+        from ..petsc import lcp as petsc_lcp
+
+        M = problem.M
+        if kind == "tao" and not problem.distributed and not is_symmetric(M, 1e-12):
+            raise ProblemError("tao solves the LCP as a QP and needs a symmetric M (use newton)")
+        PETSc = petsc_lcp.import_petsc()
+        try:
+            if kind == "tao":
+                x, its, reason, seconds = petsc_lcp.tao_bqp(M, problem.q, comm=comm, tol=min(tol, 1e-12),
+                                                           max_iter=max_iter or 500, tao_type=tao_type,
+                                                           options=options)
+            else:
+                x, its, reason, seconds = petsc_lcp.snes_vi(M, problem.q, comm=comm, tol=min(tol, 1e-12),
+                                                           max_iter=max_iter or 200, snes_type=snes_type,
+                                                           options=options)
+        except PETSc.Error as exc:  # e.g. TAO's line search on a QP that is unbounded below
+            return LCPResult(method=kind, status="petsc_error",
+                             message=f"PETSc error {exc.ierr}: " + str(exc).strip().splitlines()[-1].strip())
+        result = LCPResult(method=kind, iterations=its, message=f"PETSc: {reason}")
+        result.timings["solve"] = seconds
+        converged = "CONVERGED" in reason
+        x = best_of(problem, x, refine_on_support(problem, x)) if converged else x
+        return certify(problem, result, x, tol=tol,
+                       failure_status="certificate_failed" if converged else "not_converged")
+    run.__name__ = kind
+    return run
+
+
+SOLVERS = {
+    "lemke": lemke,
+    "enumerate": enumerate_lcp,
+    "pgs": pgs,
+    "newton": _petsc_method("newton"),
+    "tao": _petsc_method("tao"),
+}
+
+
+def available_methods() -> list[str]:
+    return sorted(SOLVERS) + ["auto"]
+
+
+def auto_order(problem: LCPProblem) -> list[str]:
+    """The methods ``auto`` tries, in order, for this problem."""
+    n = problem.n
+    if problem.distributed:
+        return ["tao", "newton"] if _symmetric(problem) else ["newton"]
+    order = []
+    if n <= DENSE_LIMIT and (not problem.sparse or n <= SMALL):
+        order = ["lemke", "newton"]
+    elif _symmetric(problem):
+        order = ["tao", "newton", "pgs"]
+    else:
+        order = ["newton"]
+    if n <= DENSE_LIMIT and "lemke" not in order:
+        order.append("lemke")
+    if n <= 12:
+        order.append("enumerate")
+    return order
+
+
+def _symmetric(problem: LCPProblem) -> bool:
+    if problem.distributed:
+        return bool(problem.M.isSymmetric(1e-12 * problem.matrix_scale))
+    return is_symmetric(problem.M, 1e-12)
+
+
+def solve_lcp(M, q, *, method: str = "auto", tol: float = DEFAULT_TOL, comm=None, **kwargs) -> LCPResult:
+    """Solve LCP(q, M): ``x ≥ 0``, ``w = Mx + q ≥ 0``, ``xᵀw = 0``.
+
+    M: ndarray, SciPy sparse matrix, or PETSc Mat (then collective on its communicator and
+    only ``newton``/``tao``/``auto`` apply).  q: vector of length n.  tol: relative
+    certificate tolerance (see :mod:`meicp.lcp.problem`).  Extra keywords go to the method
+    (``max_iter``, ``omega``, ``snes_type``, ``tao_type``, ``options`` for PETSc options).
+    Returns an :class:`LCPResult`; ``success`` only with a passing certificate.  Raises
+    :class:`ProblemError` on bad input and :class:`SolverNotFound` on an unknown method.
+    """
+    problem = LCPProblem.from_data(M, q)
+    if method == "auto":
+        return _solve_auto(problem, tol=tol, comm=comm, **kwargs)
+    if method not in SOLVERS:
+        raise SolverNotFound(method, available_methods())
+    if problem.distributed and method not in ("newton", "tao"):
+        raise ProblemError(f"method {method!r} needs M as NumPy/SciPy; a PETSc Mat takes newton or tao")
+    t0 = time.perf_counter()
+    result = SOLVERS[method](problem, tol=tol, comm=comm, **kwargs)
+    result.timings["total"] = time.perf_counter() - t0
+    return result
+
+
+def _solve_auto(problem: LCPProblem, *, tol: float, comm=None, **kwargs) -> LCPResult:
+    t0 = time.perf_counter()
+    attempts, result = [], None
+    for name in auto_order(problem):
+        try:
+            result = SOLVERS[name](problem, tol=tol, comm=comm, **kwargs)
+        except ProblemError as exc:  # this method does not apply; the next may
+            attempts.append((name, "not_applicable", str(exc)))
+            continue
+        attempts.append((name, result.status, result.message))
+        if result.success or result.status == "infeasible":  # solved, or proved unsolvable
+            break
+    if result is None:
+        result = LCPResult(method="auto", status="no_method",
+                           message="no method applies: " + "; ".join(f"{a[0]}: {a[2]}" for a in attempts))
+    result.attempts = attempts
+    result.timings["total"] = time.perf_counter() - t0
+    return result

@@ -1,0 +1,173 @@
+"""Large sparse LCPs on PETSc: SNES VI (semismooth / reduced-space Newton) and TAO.
+
+``newton``: F(x) = Mx + q with bounds 0 ≤ x ≤ ∞ solved by ``vinewtonrsls`` (default) or
+``vinewtonssls``; the Jacobian is M, refilled at each callback because ``vinewtonssls``
+modifies it in place (DESIGN §6).  Linear solves by MUMPS LU (PETSc's own LU does not
+pivot).  Any M; convergence is local, so the certificate decides.
+
+``tao``: for symmetric M the LCP is the bound-constrained QP min ½xᵀMx + qᵀx, x ≥ 0, whose
+KKT conditions are exactly the LCP; TAO's TRON/BLMVM/GPCG solve it.
+
+Both are collective on the matrix's communicator: pass a PETSc Mat (distributed) or a
+SciPy matrix (used on ``COMM_SELF``).  Options live under ``-meicp_lcp_`` (``snes_*``,
+``ksp_*``, ``pc_*``, ``tao_*``) and can be overridden on the command line.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from . import import_petsc
+from .mat import mat_from_scipy, vec_to_numpy
+from .options import OptionsScope
+
+PREFIX = "meicp_lcp_"
+
+
+def _petsc_operands(M, q, comm):
+    """A PETSc Mat for M (distributed from SciPy when needed) and a Vec for q."""
+    PETSc = import_petsc()
+    owned = not isinstance(M, PETSc.Mat)
+    A = mat_from_scipy(comm, M) if owned else M
+    qv = A.createVecLeft()
+    lo, hi = qv.getOwnershipRange()
+    qv.setArray(np.asarray(q, dtype=PETSc.ScalarType)[lo:hi])
+    return A, qv, owned
+
+
+def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
+            snes_type: str = "vinewtonrsls", options: dict | None = None):
+    """Solve LCP(q, M) with SNES VI.  Returns ``(x, iterations, reason_str, seconds)`` with x
+    gathered on every rank.  Collective."""
+    PETSc = import_petsc()
+    A, qv, owned = _petsc_operands(M, q, comm)
+    J = A.duplicate(copy=True)
+    x = A.createVecRight()
+    x.set(0.0)
+    lower, upper = x.duplicate(), x.duplicate()
+    lower.set(0.0)
+    upper.set(PETSc.INFINITY)
+    r = x.duplicate()
+
+    def residual(snes, X, F):
+        A.mult(X, F)
+        F.axpy(1.0, qv)
+
+    def jacobian(snes, X, Jm, P):
+        A.copy(Jm, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+
+    snes = PETSc.SNES().create(comm=A.getComm())
+    try:
+        snes.setFunction(residual, r)
+        snes.setJacobian(jacobian, J)
+        snes.setVariableBounds(lower, upper)
+        defaults = {"snes_type": snes_type, "snes_max_it": max_iter, "snes_atol": 1e-30,
+                    "snes_rtol": tol, "snes_stol": 0.0, "ksp_type": "preonly", "pc_type": "lu",
+                    "pc_factor_mat_solver_type": "mumps", "snes_linesearch_type": "basic"}
+        t0 = time.perf_counter()
+        with OptionsScope(PREFIX, defaults, options):
+            snes.setOptionsPrefix(PREFIX)
+            snes.setFromOptions()
+            snes.solve(None, x)
+        seconds = time.perf_counter() - t0
+        reason = snes.getConvergedReason()
+        its = snes.getIterationNumber()
+        out = vec_to_numpy(x)
+    finally:
+        snes.destroy()
+        for obj in (J, x, lower, upper, r, qv):
+            obj.destroy()
+        if owned:
+            A.destroy()
+    return out, its, _reason_name(PETSc.SNES.ConvergedReason, reason), seconds
+
+
+def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
+            tao_type: str = "tron", options: dict | None = None):
+    """Solve LCP(q, M), M symmetric, as min ½xᵀMx + qᵀx over x ≥ 0 with TAO.  Returns
+    ``(x, iterations, reason_str, seconds)``, x gathered on every rank.  Collective."""
+    PETSc = import_petsc()
+    A, qv, owned = _petsc_operands(M, q, comm)
+    x = A.createVecRight()
+    x.set(0.0)
+    lower, upper = x.duplicate(), x.duplicate()
+    lower.set(0.0)
+    upper.set(PETSc.INFINITY)
+    Ax, grad = x.duplicate(), x.duplicate()
+
+    def objective_gradient(tao, X, G):
+        A.mult(X, Ax)
+        f = 0.5 * X.dot(Ax) + qv.dot(X)
+        Ax.copy(G)
+        G.axpy(1.0, qv)
+        return f
+
+    def hessian(tao, X, H, P):
+        pass  # constant Hessian M, set once below
+
+    tao = PETSc.TAO().create(comm=A.getComm())
+    try:
+        tao.setObjectiveGradient(objective_gradient, grad)
+        tao.setHessian(hessian, A)
+        tao.setVariableBounds(lower, upper)
+        defaults = {"tao_type": tao_type, "tao_max_it": max_iter, "tao_gatol": 0.0,
+                    "tao_grtol": tol, "tao_gttol": 0.0}
+        t0 = time.perf_counter()
+        with OptionsScope(PREFIX, defaults, options):
+            tao.setOptionsPrefix(PREFIX)
+            tao.setFromOptions()
+            tao.setSolution(x)
+            tao.solve()
+        seconds = time.perf_counter() - t0
+        reason = tao.getConvergedReason()
+        its = tao.getIterationNumber()
+        out = vec_to_numpy(x)
+    finally:
+        tao.destroy()
+        for obj in (x, lower, upper, Ax, grad, qv):
+            obj.destroy()
+        if owned:
+            A.destroy()
+    return out, its, _reason_name(PETSc.TAO.Reason, reason), seconds
+
+
+def _reason_name(enum, value: int) -> str:
+    for name in dir(enum):
+        if not name.startswith("_") and getattr(enum, name) == value:
+            return f"{name} ({value})"
+    return str(value)
+
+
+def check_petsc_matrix(A) -> None:
+    """Square and finite, or ProblemError (collective)."""
+    from ..core.errors import ProblemError
+
+    m, n = A.getSize()
+    if m != n or m == 0:
+        raise ProblemError(f"M must be square and non-empty, got shape {(m, n)}")
+    if not np.isfinite(A.norm(import_petsc().NormType.FROBENIUS)):
+        raise ProblemError("M contains NaN or Inf")
+
+
+def matvec(A, x: np.ndarray) -> np.ndarray:
+    """``A @ x`` for a distributed A and a full-length x held on every rank.  Collective."""
+    X = A.createVecRight()
+    lo, hi = X.getOwnershipRange()
+    X.setArray(x[lo:hi])
+    Y = A.createVecLeft()
+    A.mult(X, Y)
+    out = vec_to_numpy(Y)
+    X.destroy()
+    Y.destroy()
+    return out
+
+
+def max_abs_entry(A) -> float:
+    """``max |a_ij|`` of a distributed matrix.  Collective."""
+    from mpi4py import MPI
+
+    _, _, data = A.getValuesCSR()
+    local = float(np.max(np.abs(data))) if data.size else 0.0
+    return A.getComm().tompi4py().allreduce(local, op=MPI.MAX)
