@@ -1,11 +1,21 @@
 #!/usr/bin/env bash
 # `make demo`: the main job on a shipped default.  Until the instability pipeline exists
-# this shows the install report and a distributed SLEPc solve checked against SciPy,
-# on 1 and on 2 ranks.
+# it shows the install report with a distributed SLEPc solve checked against SciPy (1 and
+# 2 ranks), then seed 002's diagnostic workflow on its two worked contact examples:
+# classify M (existence / uniqueness guarantees, game value), then solve the LCP.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+MEICP=.venv/bin/meicp
 echo "== meicp info --check (1 rank)"
-.venv/bin/meicp info --check
+$MEICP info --check
 echo
 echo "== mpirun -n 2 meicp info --check"
-timeout 300 mpirun -n 2 --oversubscribe .venv/bin/meicp info --check
+timeout 300 mpirun -n 2 --oversubscribe $MEICP info --check | tail -n 1
+for f in data/lcp/seed002_two_point.dat data/lcp/seed002_three_node.dat; do
+    echo
+    echo "== meicp classify $f"
+    $MEICP classify "$f"
+    echo
+    echo "== meicp lcp $f"
+    $MEICP lcp "$f"
+done

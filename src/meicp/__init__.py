@@ -11,5 +11,8 @@ from .core.errors import ConvergenceError, MeicpError, ProblemError, SolverNotFo
 from .core.results import Result  # noqa: E402
 from .core import validation  # noqa: E402,F401
 from .lcp import LCPResult, solve_lcp  # noqa: E402
+from .lcp.classes import MatrixClasses, classify  # noqa: E402
+from .lcp.game import GameValue, game_value  # noqa: E402
 
-__all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult"]
+__all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
+           "classify", "MatrixClasses", "game_value", "GameValue"]

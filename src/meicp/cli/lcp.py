@@ -53,7 +53,7 @@ def run_lcp(args) -> int:
             "timings": r.timings}, indent=2))
     else:
         rank0_print(f"LCP from {args.file}: n = {np.size(data['q'])}")
-        for name, status, message in r.attempts:
+        for name, status, message in (r.attempts if len(r.attempts) > 1 else []):
             rank0_print(f"  tried {name}: {status}" + (f" ({message})" if message and status != "solved" else ""))
         rank0_print(r.summary())
         if r.success:

@@ -19,6 +19,10 @@ from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, LCPProblem, LCPResult, best_of, certify, refine_on_support
 
 
+#: above this fraction of nonzeros M is treated as dense (one unknown per colour)
+DENSE_FRACTION = 0.25
+
+
 def greedy_colouring(A: sp.csr_matrix, seed: int = 0) -> np.ndarray:
     """Colours such that no two coupled unknowns share one (Jones–Plassmann, vectorized):
     each round, every uncoloured vertex whose random weight beats all its uncoloured
@@ -61,8 +65,13 @@ def pgs(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 100000
     if not 0 < omega < 2:
         raise ProblemError(f"pgs needs 0 < omega < 2, got {omega}")
     t0 = time.perf_counter()
-    colour = greedy_colouring(M)
-    blocks = [(idx, M[idx], d[idx]) for idx in (np.flatnonzero(colour == c) for c in range(colour.max() + 1))]
+    if M.nnz > DENSE_FRACTION * problem.n ** 2:
+        # dense coupling: every unknown is its own colour; rows as dense arrays are cheaper
+        Md = problem.dense()
+        blocks = [(np.array([i]), Md[i:i + 1], d[i:i + 1]) for i in range(problem.n)]
+    else:
+        colour = greedy_colouring(M)
+        blocks = [(idx, M[idx], d[idx]) for idx in (np.flatnonzero(colour == c) for c in range(colour.max() + 1))]
     t1 = time.perf_counter()
     x = np.zeros(problem.n) if x0 is None else np.maximum(np.asarray(x0, float), 0.0)
     scale_w = max(float(np.abs(q).max()), 1e-300)
