@@ -68,7 +68,55 @@ def chart_lcp(path):
     print(f"wrote {out}_time.png, {out}_siconos.png")
 
 
-CHARTS = {"lcp": chart_lcp}
+def chart_assembly(path):
+    """Assembly of K and M (scripts/bench_assembly.py): time vs DOFs, log-log, median and
+    min-max of the repeats per (method, ranks), a linear reference line and the 10^6-DOF
+    targets; and peak memory during assembly / matrix storage (largest over ranks)."""
+    import numpy as np
+
+    rows = [r for r in read(path) if r["status"] == "ok"]
+    times, ratio = defaultdict(lambda: defaultdict(list)), defaultdict(dict)
+    for r in rows:
+        key, d = (r["method"], int(r["ranks"])), int(r["dofs"])
+        times[key][d].append(float(r["wall_s"]))
+        ratio[key][d] = max(ratio[key].get(d, 0.0), float(r["rank_ratio"]))
+    styles = {("scipy", 1): ("C0", "o", "SciPy CSR, 1 rank"), ("petsc", 1): ("C1", "s", "PETSc AIJ, 1 rank"),
+              ("petsc", 2): ("C2", "^", "PETSc MPIAIJ, 2 ranks")}
+    fig, (ax, mx) = plt.subplots(1, 2, figsize=(12, 4.8))
+    for key in sorted(times, key=lambda k: (k[1], k[0])):
+        colour, marker, label = styles.get(key, ("C3", "x", f"{key[0]}, {key[1]} ranks"))
+        dofs = np.array(sorted(times[key]))
+        t = [np.array(times[key][d]) for d in dofs]
+        med = np.array([np.median(x) for x in t])
+        err = [med - [x.min() for x in t], [x.max() for x in t] - med]
+        ax.errorbar(dofs, med, yerr=err, color=colour, marker=marker, capsize=3, label=label)
+        mx.plot(dofs, [ratio[key][d] for d in dofs], color=colour, marker=marker, label=label)
+    ref = ("petsc", 1) if ("petsc", 1) in times else next(iter(times))
+    d_ref = max(times[ref])
+    t_ref = float(np.median(times[ref][d_ref]))
+    xs = np.array([8e3, 1.3e6])
+    ax.plot(xs, t_ref * xs / d_ref, color="0.5", ls="--", lw=1, label="linear in DOFs (through PETSc 1 rank, 10^6)")
+    for level, colour, text, dy in ((5, "C1", "target 1 rank: 5 s", 1.08), (3, "C2", "target 2 ranks: 3 s", 0.75)):
+        ax.plot([6e5, 1.6e6], [level, level], color=colour, lw=2, ls=":")
+        ax.text(6e5, level * dy, text, color=colour, fontsize=8)
+    ax.set(xscale="log", yscale="log", xlabel="DOFs", ylabel="wall time of K and M [s] (median, min-max)",
+           title="Assembly time, two-layer lattice")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    mx.axhline(2.0, color="k", ls=":", lw=1.5, label="target: 2x matrix storage")
+    top = max(max(v.values()) for v in ratio.values())
+    mx.set(xscale="log", ylim=(0, max(2.5, 1.1 * top)), xlabel="DOFs",
+           ylabel="peak RSS above start / matrix storage", title="Assembly memory (largest over ranks)")
+    mx.grid(True, which="both", alpha=0.3)
+    mx.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(path).with_suffix(".png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    print(f"wrote {out}")
+
+
+CHARTS = {"lcp": chart_lcp, "assembly": chart_assembly}
 
 if __name__ == "__main__":
     if len(sys.argv) != 3 or sys.argv[1] not in CHARTS:

@@ -1,0 +1,93 @@
+"""``meicp lattice SCENE.toml -o DIR``: build the scene's lattice, assemble K and M on all
+ranks, and write ``DIR/NAME.h5`` + ``DIR/NAME.xdmf`` (open the .xdmf in ParaView) and
+``DIR/NAME.png``."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..core.errors import ProblemError
+from ..core.log import rank0_print
+from .main import EXIT_OK
+
+
+def register(sub) -> None:
+    p = sub.add_parser("lattice", help="build a scene's lattice, assemble K and M, write HDF5 + XDMF + PNG")
+    p.add_argument("scene", help="scene file (TOML)")
+    p.add_argument("-o", "--output", default=".", help="output directory, created if missing (default: .)")
+    p.add_argument("--name", help="file name stem (default: the scene file's)")
+    p.add_argument("--no-plot", action="store_true", help="skip the PNG")
+    p.add_argument("--no-assemble", action="store_true",
+                   help="skip K and M (geometry, bonds and materials only)")
+    p.set_defaults(run=run)
+
+
+def _make_dir(comm, out: Path) -> None:
+    error = None
+    if comm.Get_rank() == 0:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            error = f"cannot create output directory {str(out)!r}: {exc.strerror or exc}"
+    error = comm.bcast(error, root=0)
+    if error:
+        raise ProblemError(error)
+
+
+def run(args) -> int:
+    from mpi4py import MPI
+
+    from ..io.lattice_output import write_lattice
+    from ..io.scene import load_scene
+    from ..lattice.assembly import assemble
+    from ..lattice.model import LatticeModel
+
+    comm = MPI.COMM_WORLD
+    scene = load_scene(args.scene)
+    model = LatticeModel(scene)
+    out = Path(args.output)
+    stem = args.name or Path(args.scene).stem
+    if not stem or "/" in stem:
+        raise ProblemError(f"--name {stem!r} must be a plain file name stem")
+    _make_dir(comm, out)
+    rank0_print(model.describe())
+
+    fields, K, M = {}, None, None
+    if not args.no_assemble:
+        from ..petsc import import_petsc
+
+        PETSc = import_petsc()
+        comm.Barrier()
+        t0 = time.perf_counter()
+        K, M = assemble(scene, comm)
+        comm.Barrier()
+        dt = time.perf_counter() - t0
+        info = K.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)
+        rank0_print(f"K: {model.n_dofs} x {model.n_dofs}, {int(info['nz_used']):,} nonzeros "
+                    f"(preallocated {int(info['nz_allocated']):,}, mallocs {int(info['mallocs'])}); "
+                    f"M: lumped, total mass {model.total_mass():.6g}; assembled in {dt:.3f} s "
+                    f"on {comm.Get_size()} rank(s)")
+        fields["K_diagonal"] = K.getDiagonal()
+    try:
+        files = write_lattice(out / f"{stem}.h5", model, fields=fields, comm=comm)
+    finally:
+        for obj in (fields.get("K_diagonal"), K, M):
+            if obj is not None:
+                obj.destroy()
+    rank0_print(f"wrote {files.h5}")
+    rank0_print(f"wrote {files.xdmf}  (open it in ParaView)")
+    if not args.no_plot:
+        error = None
+        if comm.Get_rank() == 0:
+            from ..plotting.lattice import plot_lattice
+
+            try:
+                png = plot_lattice(model, out / f"{stem}.png")
+                rank0_print(f"wrote {png}")
+            except ProblemError as exc:
+                error = str(exc)
+        error = comm.bcast(error, root=0)
+        if error:
+            raise ProblemError(error)
+    return EXIT_OK

@@ -1,0 +1,640 @@
+"""Scene files: TOML (DESIGN §5) loaded into frozen dataclasses.
+
+A scene declares one layered lattice, its boundary conditions, its contacts and how to
+solve it.  :func:`load_scene` reads a file, :func:`loads_scene` a string and
+:func:`scene_from_dict` an already parsed table.  Every key is checked: an unknown key, a
+value of the wrong type or out of range raises :class:`~meicp.core.errors.ProblemError`
+naming the key path (``layers[1].density``) before anything else happens.
+
+The whole schema, with defaults (``required`` = no default)::
+
+    title = ""                    # optional free text
+
+    [lattice]
+    nx = 5                        # required, integer >= 2: nodes per row, left to right
+    spacing = 1.0                 # a > 0: node spacing, also the mass a³ per unit density
+    shear = 0.0                   # reference simple shear: node (i, j) at (a·i + shear·a·j, a·j)
+    interface_stiffness = "mean"  # default k_AB of a bond joining two materials:
+                                  # "mean" ((k_A + k_B) / 2) or a number > 0
+
+    [[layers]]                    # required, at least one, bottom to top
+    name = "A"                    # required, unique among layers and embedded bands
+    rows = 2                      # required, integer >= 1
+    stiffness = 1.0               # required, > 0: k of every bond inside the layer
+    density = 1.0                 # required, > 0: node mass ρ·a³ (both DOFs)
+
+    [[embedded]]                  # optional: a band of another material inside a layer
+    name = "stiff"                # required, unique
+    host = "A"                    # required: the layer it lies in
+    row = 0                       # first row, counted from the host's bottom row (default 0)
+    rows = 1                      # thickness in rows (default 1); row + rows <= host rows
+    column = 0                    # first column (default 0)
+    columns = 3                   # width in columns (default: to the right edge)
+    stiffness = 10.0              # required, > 0
+    density = 1.0                 # required, > 0
+    interface_stiffness = 2.0     # k of bonds to the host (default: lattice rule)
+
+    [boundary]                    # each side: "free" (default), "fixed", "fixed_x", "fixed_y";
+    top = "fixed"                 # bottom may also be "contact" (a rigid rough base, needs
+    bottom = "contact"            # [contact]).  fixed_x / fixed_y fix one component only.
+    left = "free"
+    right = "free"
+
+    [[interfaces]]                # optional, between layer `below` and the layer above it
+    below = "A"                   # required: a layer that is not the top one
+    kind = "bonded"               # "bonded" (default) | "frictional"
+    stiffness = 3.0               # bonded only: k_AB (default: lattice rule)
+    friction = 0.6                # frictional only, required, >= 0: Coulomb μ
+    states = "solve"              # frictional only: see [contact].states (default "solve")
+
+    [contact]                     # the rigid base; required iff boundary.bottom = "contact"
+    friction = 3.0                # required, >= 0: Coulomb μ
+    states = "slip+"              # "solve" (default: from the static LCP), one state for all
+                                  # contact nodes, or a list of nx states, left to right, from
+                                  # stick | slip+ | slip- | separated | grazing
+
+    [load]                        # optional
+    top_displacement = [0.06, -0.1]   # prescribed displacement of the top row (needs a
+                                      # top boundary that is not "free")
+    gravity = 0.0                 # body force -gravity·ρ·a³ on every node, in y
+
+    [solver]
+    method = "auto"               # a method name, checked by the solver that uses it
+    all_solutions = false         # enumerate every complementarity solution
+    lam_min = <none>              # lower bound on the eigenvalue (σ), optional
+    nev = <none>                  # eigenpairs per eigen-solve (integer >= 1), optional
+    tol = <none>                  # tolerance (> 0), optional
+    max_iterations = <none>       # integer >= 1, optional
+
+    [petsc]                       # free-form: PETSc options (without the leading dash and
+    eps_tol = 1e-10               # without the solver's prefix); scalar values only
+
+Resolved at load time, so that later code has one place to look: ``Scene.interfaces`` has
+one entry per pair of adjacent layers, bottom to top (those not declared are bonded with
+the lattice's default rule), and every bonded interface or embedded band carries its
+numeric ``stiffness``; a frictional interface has ``stiffness = None`` and no bonds (its
+contact law is added by the contact module).  ``Embedded.columns`` is resolved to a number.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..core.errors import ProblemError
+
+#: boundary condition names for any side; "contact" is allowed on the bottom only
+BOUNDARY_KINDS = ("free", "fixed", "fixed_x", "fixed_y")
+CONTACT = "contact"
+SIDES = ("top", "bottom", "left", "right")
+#: contact node states (DESIGN §4), and "solve" = find them from the static LCP
+STATES = ("stick", "slip+", "slip-", "separated", "grazing")
+SOLVE = "solve"
+INTERFACE_KINDS = ("bonded", "frictional")
+
+
+# --------------------------------------------------------------------------- dataclasses
+
+class FrozenOptions(Mapping):
+    """A read-only, picklable mapping (the ``[petsc]`` table): scenes can be sent between
+    ranks with mpi4py and hashed like the other frozen fields."""
+
+    __slots__ = ("_data",)
+
+    def __init__(self, data=()):
+        object.__setattr__(self, "_data", dict(data))
+
+    def __getitem__(self, key):
+        return self._data[key]
+
+    def __iter__(self):
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("FrozenOptions is read-only")
+
+    def __reduce__(self):
+        return (FrozenOptions, (self._data,))
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self._data.items())))
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Mapping) and dict(self) == dict(other)
+
+    def __repr__(self) -> str:
+        return f"FrozenOptions({self._data!r})"
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """The ``[lattice]`` table: columns, spacing, reference shear, default k_AB rule."""
+
+    nx: int
+    spacing: float = 1.0
+    shear: float = 0.0
+    interface_stiffness: str | float = "mean"
+
+    def pair_stiffness(self, k_a: float, k_b: float) -> float:
+        """The default stiffness of a bond joining materials of stiffness ``k_a`` and ``k_b``."""
+        if self.interface_stiffness == "mean":
+            return 0.5 * (k_a + k_b)
+        return float(self.interface_stiffness)
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One ``[[layers]]`` entry: a band of ``rows`` node rows of one material."""
+
+    name: str
+    rows: int
+    stiffness: float
+    density: float
+
+
+@dataclass(frozen=True)
+class Embedded:
+    """One ``[[embedded]]`` entry: a rectangle of another material inside layer ``host``.
+
+    Rows ``row .. row+rows-1`` counted from the host's bottom row, columns
+    ``column .. column+columns-1``.  ``stiffness`` is the bond stiffness inside the band,
+    ``interface_stiffness`` (resolved) the stiffness of bonds between band and host.
+    """
+
+    name: str
+    host: str
+    stiffness: float
+    density: float
+    row: int = 0
+    rows: int = 1
+    column: int = 0
+    columns: int = 0
+    interface_stiffness: float = 0.0
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """``[boundary]``: per side ``free``, ``fixed``, ``fixed_x``, ``fixed_y``; bottom may be ``contact``."""
+
+    top: str = "free"
+    bottom: str = "free"
+    left: str = "free"
+    right: str = "free"
+
+    def fixed_components(self, side: str) -> tuple[bool, bool]:
+        """Whether the (x, y) displacement of the nodes of ``side`` is prescribed (Dirichlet)."""
+        kind = getattr(self, side)
+        return {"fixed": (True, True), "fixed_x": (True, False),
+                "fixed_y": (False, True)}.get(kind, (False, False))
+
+
+@dataclass(frozen=True)
+class Interface:
+    """The interface between layer ``below`` (index ``index``) and layer ``index + 1``.
+
+    ``kind`` is ``bonded`` (bonds with ``stiffness`` cross it) or ``frictional`` (no bonds;
+    the top row of the lower layer and the bottom row of the upper layer are in Coulomb
+    contact with coefficient ``friction``, node states ``states``, DESIGN §4 (b)).
+    ``declared`` tells whether the scene file has an entry for it.
+    """
+
+    below: str
+    index: int
+    kind: str = "bonded"
+    stiffness: float | None = None
+    friction: float | None = None
+    states: str | tuple[str, ...] | None = None
+    declared: bool = False
+
+    @property
+    def bonded(self) -> bool:
+        return self.kind == "bonded"
+
+
+@dataclass(frozen=True)
+class Contact:
+    """``[contact]``: the rigid rough base under the bottom row."""
+
+    friction: float
+    states: str | tuple[str, ...] = SOLVE
+
+
+@dataclass(frozen=True)
+class Load:
+    """``[load]``: prescribed top-row displacement (used by ``states = "solve"``) and gravity."""
+
+    top_displacement: tuple[float, float] | None = None
+    gravity: float = 0.0
+
+
+@dataclass(frozen=True)
+class Solver:
+    """``[solver]``: method name and the common controls (``None`` = the solver's default)."""
+
+    method: str = "auto"
+    all_solutions: bool = False
+    lam_min: float | None = None
+    nev: int | None = None
+    tol: float | None = None
+    max_iterations: int | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A whole scene file.  ``interfaces`` has one entry per adjacent pair of layers."""
+
+    lattice: Lattice
+    layers: tuple[Layer, ...]
+    boundary: Boundary = field(default_factory=Boundary)
+    interfaces: tuple[Interface, ...] = ()
+    embedded: tuple[Embedded, ...] = ()
+    contact: Contact | None = None
+    load: Load | None = None
+    solver: Solver = field(default_factory=Solver)
+    petsc: Mapping[str, Any] = field(default_factory=FrozenOptions)
+    title: str = ""
+    source: str | None = None
+
+    @property
+    def nx(self) -> int:
+        return self.lattice.nx
+
+    @property
+    def ny(self) -> int:
+        """Node rows, all layers together."""
+        return sum(layer.rows for layer in self.layers)
+
+    @property
+    def n_nodes(self) -> int:
+        return self.nx * self.ny
+
+    @property
+    def n_dofs(self) -> int:
+        return 2 * self.n_nodes
+
+    def layer_index(self, name: str) -> int:
+        for k, layer in enumerate(self.layers):
+            if layer.name == name:
+                return k
+        raise KeyError(name)
+
+    def frictional_interfaces(self) -> tuple[Interface, ...]:
+        return tuple(itf for itf in self.interfaces if itf.kind == "frictional")
+
+
+# --------------------------------------------------------------------------- loading
+
+def load_scene(path) -> Scene:
+    """Read and validate a TOML scene file.  Raises :class:`ProblemError` naming the key."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProblemError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from None
+    return loads_scene(text, source=str(path))
+
+
+def loads_scene(text: str, source: str = "<string>") -> Scene:
+    """Parse and validate scene TOML given as a string."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProblemError(f"{source}: not valid TOML: {exc}") from None
+    return scene_from_dict(data, source=source)
+
+
+def scene_from_dict(data: Mapping, source: str = "<dict>") -> Scene:
+    """Validate an already parsed scene table (as :mod:`tomllib` returns it)."""
+    return _SceneParser(source).parse(data)
+
+
+# --------------------------------------------------------------------------- validation
+
+_REQUIRED = object()
+
+
+def _fmt(value) -> str:
+    return repr(value)
+
+
+class _Table:
+    """Reads the keys of one table, remembering its key path and which keys were used."""
+
+    def __init__(self, parser: "_SceneParser", data, path: str):
+        self.parser = parser
+        self.path = path
+        if not isinstance(data, Mapping):
+            parser.fail(path, f"must be a table, got {type(data).__name__} {_fmt(data)}")
+        self.data = data
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def raw(self, name: str, default=_REQUIRED):
+        self.used.add(name)
+        if name not in self.data:
+            if default is _REQUIRED:
+                self.parser.fail(self.key(name), "is required")
+            return default
+        return self.data[name]
+
+    def integer(self, name: str, default=_REQUIRED, minimum: int | None = None):
+        value = self.raw(name, default)
+        if value is default and name not in self.data:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.parser.fail(self.key(name), f"must be an integer, got {_fmt(value)}")
+        if minimum is not None and value < minimum:
+            self.parser.fail(self.key(name), f"must be >= {minimum}, got {value}")
+        return int(value)
+
+    def number(self, name: str, default=_REQUIRED, *, positive=False, nonnegative=False):
+        value = self.raw(name, default)
+        if value is default and name not in self.data:
+            return value
+        return self.parser.check_number(self.key(name), value, positive=positive,
+                                        nonnegative=nonnegative)
+
+    def string(self, name: str, default=_REQUIRED, choices=None):
+        value = self.raw(name, default)
+        if value is default and name not in self.data:
+            return value
+        if not isinstance(value, str):
+            self.parser.fail(self.key(name), f"must be a string, got {_fmt(value)}")
+        if choices is not None and value not in choices:
+            self.parser.fail(self.key(name), f"must be one of {', '.join(map(repr, choices))}, "
+                                             f"got {_fmt(value)}")
+        return value
+
+    def boolean(self, name: str, default=_REQUIRED):
+        value = self.raw(name, default)
+        if not isinstance(value, bool):
+            self.parser.fail(self.key(name), f"must be true or false, got {_fmt(value)}")
+        return value
+
+    def done(self) -> None:
+        unknown = [k for k in self.data if k not in self.used]
+        if unknown:
+            known = ", ".join(sorted(self.used)) or "none"
+            self.parser.fail(self.key(unknown[0]), f"is not a known key (known here: {known})",
+                             prefix="unknown key ")
+
+
+class _SceneParser:
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, key: str, message: str, prefix: str = ""):
+        raise ProblemError(f"{self.source}: {prefix}{key} {message}")
+
+    def check_number(self, key, value, *, positive=False, nonnegative=False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(key, f"must be a number, got {_fmt(value)}")
+        value = float(value)
+        if not math.isfinite(value):
+            self.fail(key, f"must be finite, got {value}")
+        if positive and not value > 0:
+            self.fail(key, f"must be > 0, got {value:g}")
+        if nonnegative and not value >= 0:
+            self.fail(key, f"must be >= 0, got {value:g}")
+        return value
+
+    def array_of_tables(self, data, name: str) -> list:
+        value = data.get(name, [])
+        if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
+            self.fail(name, f"must be an array of tables ([[{name}]]), got {_fmt(value)}")
+        return value
+
+    def states(self, key: str, value, n: int):
+        if isinstance(value, str):
+            if value != SOLVE and value not in STATES:
+                self.fail(key, f"must be {SOLVE!r}, one of {', '.join(map(repr, STATES))} "
+                               f"or a list of those, got {_fmt(value)}")
+            return value
+        if not isinstance(value, list):
+            self.fail(key, f"must be a string or a list of strings, got {_fmt(value)}")
+        if len(value) != n:
+            self.fail(key, f"must list one state per column (nx = {n}), got {len(value)}")
+        for k, s in enumerate(value):
+            if s not in STATES:
+                extra = " ('solve' stands for the whole list, not one node)" if s == SOLVE else ""
+                self.fail(f"{key}[{k}]", f"must be one of {', '.join(map(repr, STATES))}, "
+                                         f"got {_fmt(s)}{extra}")
+        return tuple(value)
+
+    # ---------------------------------------------------------------- the whole scene
+    def parse(self, data) -> Scene:
+        top = _Table(self, data, "")
+        title = top.string("title", "")
+        lattice = self.lattice(top.raw("lattice"))
+        top.used.update({"layers", "embedded", "interfaces"})
+        layers = self.layers(data, lattice)
+        embedded = self.embedded(data, lattice, layers)
+        interfaces = self.interfaces(data, lattice, layers)
+        boundary = self.boundary(top.raw("boundary", {}))
+        contact_data = top.raw("contact", None)
+        contact = None
+        if contact_data is not None:
+            contact = self.contact(contact_data, lattice)
+        if boundary.bottom == CONTACT and contact is None:
+            self.fail("contact", "is required when boundary.bottom = \"contact\" "
+                                 "(give at least contact.friction)")
+        if contact is not None and boundary.bottom != CONTACT:
+            self.fail("contact", f"describes the rigid base, but boundary.bottom is "
+                                 f"{boundary.bottom!r}, not \"contact\"")
+        load_data = top.raw("load", None)
+        load = None if load_data is None else self.load(load_data, boundary)
+        solver = self.solver(top.raw("solver", {}))
+        petsc = self.petsc(top.raw("petsc", {}))
+        top.done()
+        ny = sum(layer.rows for layer in layers)
+        if ny * lattice.nx * 2 >= 2**62:
+            self.fail("layers", f"declare {ny} rows x {lattice.nx} columns: too many DOFs")
+        return Scene(lattice=lattice, layers=tuple(layers), boundary=boundary,
+                     interfaces=tuple(interfaces), embedded=tuple(embedded), contact=contact,
+                     load=load, solver=solver, petsc=petsc, title=title, source=self.source)
+
+    def lattice(self, data) -> Lattice:
+        t = _Table(self, data, "lattice")
+        nx = t.integer("nx", minimum=2)
+        spacing = t.number("spacing", 1.0, positive=True)
+        shear = t.number("shear", 0.0)
+        kab = t.raw("interface_stiffness", "mean")
+        if isinstance(kab, str):
+            if kab != "mean":
+                self.fail("lattice.interface_stiffness", f"must be \"mean\" or a number > 0, got {kab!r}")
+        else:
+            kab = self.check_number("lattice.interface_stiffness", kab, positive=True)
+        t.done()
+        return Lattice(nx=nx, spacing=spacing, shear=shear, interface_stiffness=kab)
+
+    def layers(self, data, lattice) -> list[Layer]:
+        if "layers" not in data:
+            self.fail("layers", "is required: at least one [[layers]] table, bottom to top")
+        entries = self.array_of_tables(data, "layers")
+        if not entries:
+            self.fail("layers", "must have at least one [[layers]] table")
+        layers, names = [], set()
+        for k, entry in enumerate(entries):
+            t = _Table(self, entry, f"layers[{k}]")
+            name = t.string("name")
+            if not name:
+                self.fail(t.key("name"), "must not be empty")
+            if name in names:
+                self.fail(t.key("name"), f"repeats the layer name {name!r}")
+            names.add(name)
+            layer = Layer(name=name, rows=t.integer("rows", minimum=1),
+                          stiffness=t.number("stiffness", positive=True),
+                          density=t.number("density", positive=True))
+            t.done()
+            layers.append(layer)
+        return layers
+
+    def embedded(self, data, lattice, layers) -> list[Embedded]:
+        entries = self.array_of_tables(data, "embedded")
+        by_name = {layer.name: layer for layer in layers}
+        out, names, boxes = [], set(by_name), []
+        for k, entry in enumerate(entries):
+            t = _Table(self, entry, f"embedded[{k}]")
+            name = t.string("name")
+            if not name:
+                self.fail(t.key("name"), "must not be empty")
+            if name in names:
+                self.fail(t.key("name"), f"repeats the name {name!r} (layer and band names are unique)")
+            names.add(name)
+            host = t.string("host")
+            if host not in by_name:
+                self.fail(t.key("host"), f"must name a layer ({', '.join(map(repr, by_name))}), got {host!r}")
+            hrows = by_name[host].rows
+            row = t.integer("row", 0, minimum=0)
+            rows = t.integer("rows", 1, minimum=1)
+            if row + rows > hrows:
+                self.fail(t.key("rows"), f"row + rows = {row + rows} exceeds the {hrows} rows of layer {host!r}")
+            column = t.integer("column", 0, minimum=0)
+            if column >= lattice.nx:
+                self.fail(t.key("column"), f"must be < nx = {lattice.nx}, got {column}")
+            columns = t.integer("columns", lattice.nx - column, minimum=1)
+            if column + columns > lattice.nx:
+                self.fail(t.key("columns"), f"column + columns = {column + columns} exceeds nx = {lattice.nx}")
+            stiffness = t.number("stiffness", positive=True)
+            density = t.number("density", positive=True)
+            kab = t.number("interface_stiffness", None, positive=True)
+            if kab is None:
+                kab = lattice.pair_stiffness(stiffness, by_name[host].stiffness)
+            t.done()
+            box = (host, row, row + rows, column, column + columns)
+            for other_k, other in boxes:
+                if (other[0] == host and box[1] < other[2] and other[1] < box[2]
+                        and box[3] < other[4] and other[3] < box[4]):
+                    self.fail(f"embedded[{k}]", f"overlaps embedded[{other_k}] in layer {host!r}")
+            boxes.append((k, box))
+            out.append(Embedded(name=name, host=host, stiffness=stiffness, density=density,
+                                row=row, rows=rows, column=column, columns=columns,
+                                interface_stiffness=kab))
+        return out
+
+    def interfaces(self, data, lattice, layers) -> list[Interface]:
+        entries = self.array_of_tables(data, "interfaces")
+        index = {layer.name: k for k, layer in enumerate(layers)}
+        declared: dict[int, Interface] = {}
+        for k, entry in enumerate(entries):
+            t = _Table(self, entry, f"interfaces[{k}]")
+            below = t.string("below")
+            if below not in index:
+                self.fail(t.key("below"), f"must name a layer ({', '.join(map(repr, index))}), got {below!r}")
+            i = index[below]
+            if i == len(layers) - 1:
+                self.fail(t.key("below"), f"names the top layer {below!r}: there is no layer above it")
+            if i in declared:
+                self.fail(t.key("below"), f"repeats the interface above layer {below!r}")
+            kind = t.string("kind", "bonded", INTERFACE_KINDS)
+            if kind == "bonded":
+                for bad in ("friction", "states"):
+                    if bad in entry:
+                        self.fail(t.key(bad), "applies to kind = \"frictional\" only")
+                stiffness = t.number("stiffness", None, positive=True)
+                if stiffness is None:
+                    stiffness = lattice.pair_stiffness(layers[i].stiffness, layers[i + 1].stiffness)
+                itf = Interface(below=below, index=i, kind=kind, stiffness=stiffness, declared=True)
+            else:
+                if "stiffness" in entry:
+                    self.fail(t.key("stiffness"), "applies to kind = \"bonded\" only "
+                                                  "(a frictional interface has no bonds)")
+                friction = t.number("friction", positive=False, nonnegative=True)
+                states = self.states(t.key("states"), t.raw("states", SOLVE), lattice.nx)
+                itf = Interface(below=below, index=i, kind=kind, friction=friction,
+                                states=states, declared=True)
+            t.done()
+            declared[i] = itf
+        out = []
+        for i in range(len(layers) - 1):
+            out.append(declared.get(i) or Interface(
+                below=layers[i].name, index=i, kind="bonded",
+                stiffness=lattice.pair_stiffness(layers[i].stiffness, layers[i + 1].stiffness)))
+        return out
+
+    def boundary(self, data) -> Boundary:
+        t = _Table(self, data, "boundary")
+        values = {}
+        for side in SIDES:
+            choices = BOUNDARY_KINDS + ((CONTACT,) if side == "bottom" else ())
+            values[side] = t.string(side, "free", choices)
+        t.done()
+        return Boundary(**values)
+
+    def contact(self, data, lattice) -> Contact:
+        t = _Table(self, data, "contact")
+        friction = t.number("friction", nonnegative=True)
+        states = self.states("contact.states", t.raw("states", SOLVE), lattice.nx)
+        t.done()
+        return Contact(friction=friction, states=states)
+
+    def load(self, data, boundary) -> Load:
+        t = _Table(self, data, "load")
+        top = t.raw("top_displacement", None)
+        if top is not None:
+            if not isinstance(top, list) or len(top) != 2:
+                self.fail("load.top_displacement", f"must be a list of 2 numbers [ux, uy], got {_fmt(top)}")
+            top = tuple(self.check_number(f"load.top_displacement[{k}]", v) for k, v in enumerate(top))
+            if boundary.top == "free":
+                self.fail("load.top_displacement", "needs a top boundary that is fixed "
+                                                   "(boundary.top is \"free\")")
+        gravity = t.number("gravity", 0.0)
+        t.done()
+        return Load(top_displacement=top, gravity=gravity)
+
+    def solver(self, data) -> Solver:
+        t = _Table(self, data, "solver")
+        method = t.string("method", "auto")
+        if not method:
+            self.fail("solver.method", "must not be empty")
+        s = Solver(method=method,
+                   all_solutions=t.boolean("all_solutions", False),
+                   lam_min=t.number("lam_min", None),
+                   nev=t.integer("nev", None, minimum=1),
+                   tol=t.number("tol", None, positive=True),
+                   max_iterations=t.integer("max_iterations", None, minimum=1))
+        t.done()
+        return s
+
+    def petsc(self, data) -> Mapping[str, Any]:
+        if not isinstance(data, Mapping):
+            self.fail("petsc", f"must be a table, got {_fmt(data)}")
+        out = {}
+        for key, value in data.items():
+            if isinstance(value, (Mapping, list)) or not isinstance(value, (str, int, float, bool)):
+                self.fail(f"petsc.{key}", f"must be a string, number or boolean, got {_fmt(value)}")
+            if isinstance(value, float) and not math.isfinite(value):
+                self.fail(f"petsc.{key}", f"must be finite, got {value}")
+            name = key.lstrip("-")
+            if not name or any(c.isspace() for c in name):
+                self.fail(f"petsc.{key}", "is not a valid PETSc option name")
+            out[name] = value
+        return FrozenOptions(out)

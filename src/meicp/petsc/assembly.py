@@ -1,0 +1,113 @@
+"""Distributed assembly of the lattice's K and M as PETSc AIJ matrices.
+
+Layout: the ranks split the lattice into contiguous bands of node rows
+(:meth:`LatticeModel.row_band`); since nodes are numbered row by row, a band's DOFs are a
+contiguous range of the natural numbering, so the PETSc ownership ranges *are* the natural
+numbering and nothing is permuted on the way in or out.  Each rank computes only its own
+rows, in chunks, with the vectorised stencil of :mod:`meicp.lattice.assembly`; the
+matrix is preallocated exactly from the stencil (diagonal/off-diagonal counts per row)
+and each chunk is inserted with one ``MatSetValues`` per row from C
+(``setValuesIJV`` with a row map), so peak memory is the matrix plus one chunk.
+
+All functions taking ``comm`` or a matrix are collective on that communicator.  The caller
+owns every returned PETSc object and destroys it (collectively) when done.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.errors import ProblemError
+from ..lattice.assembly import chunks, index_dtype, mass_diagonal, neighbour_exists, stiffness_block
+from ..lattice.model import SLOTS, LatticeModel
+from . import import_petsc, to_petsc_comm
+
+
+def row_band(model: LatticeModel, comm) -> tuple[int, int]:
+    """Node rows ``[j0, j1)`` owned by this rank of ``comm``."""
+    pcomm = to_petsc_comm(comm)
+    return model.row_band(pcomm.getRank(), pcomm.getSize())
+
+
+def preallocation(model: LatticeModel, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
+    """Exact (diagonal-block, off-diagonal-block) nonzeros per DOF row of rows ``[j0, j1)``."""
+    PETSc = import_petsc()
+    d_nnz = np.empty(2 * (j1 - j0) * model.nx, dtype=PETSc.IntType)
+    o_nnz = np.empty_like(d_nnz)
+    dj = np.array([s[1] for s in SLOTS])
+    for a, b in chunks(model, j0, j1):
+        ex = neighbour_exists(model, a, b)
+        j = np.repeat(np.arange(a, b), model.nx)
+        other_row = j[:, None] + dj[None, :]
+        inside = (other_row >= j0) & (other_row < j1)
+        r0 = 2 * (a - j0) * model.nx
+        r1 = 2 * (b - j0) * model.nx
+        d_nnz[r0:r1] = np.repeat(2 * (ex & inside).sum(axis=1), 2)
+        o_nnz[r0:r1] = np.repeat(2 * (ex & ~inside).sum(axis=1), 2)
+    return d_nnz, o_nnz
+
+
+def assemble_petsc(model: LatticeModel, comm, chunk_nodes: int | None = None):
+    """``(K, M)`` as PETSc AIJ matrices on ``comm`` in natural numbering (collective).
+
+    Rank r owns the DOFs of node rows ``model.row_band(r, size)``.  K is flagged symmetric.
+    Raises :class:`ProblemError` when the lattice needs 64-bit indices and this PETSc has
+    32-bit ones.
+    """
+    PETSc = import_petsc()
+    pcomm = to_petsc_comm(comm)
+    idx = PETSc.IntType
+    if np.dtype(index_dtype(model)).itemsize > np.dtype(idx).itemsize:
+        raise ProblemError(f"the lattice has {model.n_dofs} DOFs: too many for this PETSc build "
+                           f"({np.dtype(idx).itemsize * 8}-bit indices)")
+    j0, j1 = model.row_band(pcomm.getRank(), pcomm.getSize())
+    r0, r1 = model.dof_range(j0, j1)
+    n, m = model.n_dofs, r1 - r0
+    d_nnz, o_nnz = preallocation(model, j0, j1)
+    K = PETSc.Mat().createAIJ(size=((m, n), (m, n)), nnz=(d_nnz, o_nnz), comm=pcomm)
+    del d_nnz, o_nnz
+    K.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+    K.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
+    for a, b in chunks(model, j0, j1, chunk_nodes):
+        ra, rb = model.dof_range(a, b)
+        indptr, indices, data = stiffness_block(model, a, b, idx)
+        K.setValuesIJV(indptr, indices, data, rowmap=np.arange(ra, rb, dtype=idx))
+        del indptr, indices, data
+    K.assemble()
+    K.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+
+    M = PETSc.Mat().createAIJ(size=((m, n), (m, n)), nnz=(1, 0), comm=pcomm)
+    M.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
+    rows = np.arange(r0, r1, dtype=idx)
+    M.setValuesIJV(np.arange(m + 1, dtype=idx), rows, mass_diagonal(model, j0, j1), rowmap=rows)
+    M.assemble()
+    M.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    return K, M
+
+
+def principal_submatrix(A, keep):
+    """``A[keep, keep]`` as a new distributed matrix (collective).
+
+    ``keep``: sorted global indices (every rank may pass the whole array; each uses the part
+    in its ownership range, which it then owns in the result).  E.g. the free DOFs of a
+    lattice (``LatticeModel.free_dofs()``) to remove Dirichlet DOFs.  Caller destroys it.
+    """
+    PETSc = import_petsc()
+    r0, r1 = A.getOwnershipRange()
+    keep = np.asarray(keep)
+    local = keep[(keep >= r0) & (keep < r1)].astype(PETSc.IntType)
+    iset = PETSc.IS().createGeneral(local, comm=A.getComm())
+    try:
+        return A.createSubMatrix(iset, iset)
+    finally:
+        iset.destroy()
+
+
+def storage_bytes(A) -> int:
+    """Bytes of this rank's part of an AIJ matrix: values, column indices and row starts."""
+    PETSc = import_petsc()
+    nnz = int(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_allocated"])
+    m = A.getLocalSize()[0]
+    isz = np.dtype(PETSc.IntType).itemsize
+    return nnz * (np.dtype(PETSc.ScalarType).itemsize + isz) + (m + 1) * isz
