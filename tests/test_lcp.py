@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import meicp
 from meicp.core.errors import ProblemError, SolverNotFound
-from meicp.io.lcp_files import read_problem, read_siconos_lcp, write_hdf5_problem
+from meicp.io.problem_files import read_problem, read_siconos_lcp, write_hdf5_problem
 from meicp.lcp.problem import LCPProblem, relative_residual
 from meicp.lcp.solve import solve_lcp
 

@@ -12,6 +12,7 @@ from .core.results import Result  # noqa: E402
 from .core import validation  # noqa: E402,F401
 from .lcp import LCPResult, solve_lcp  # noqa: E402
 from .lcp.classes import MatrixClasses, classify  # noqa: E402
+from .eicp import EiCPResult, EiCPSolution, solve_eicp  # noqa: E402
 from .lcp.game import GameValue, game_value  # noqa: E402
 from .io.scene import Scene, load_scene  # noqa: E402
 from .lattice.assembly import assemble  # noqa: E402
@@ -19,4 +20,5 @@ from .lattice.model import LatticeModel  # noqa: E402
 
 __all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
            "classify", "MatrixClasses", "game_value", "GameValue",
-           "load_scene", "Scene", "assemble", "LatticeModel"]
+           "load_scene", "Scene", "assemble", "LatticeModel",
+           "solve_eicp", "EiCPResult", "EiCPSolution"]

@@ -33,14 +33,10 @@ def _vector(x):
 
 
 def run_lcp(args) -> int:
-    from ..io.lcp_files import read_problem
+    from ..io.problem_files import read_problem
     from ..lcp.solve import solve_lcp
 
     data = read_problem(args.file)
-    if "q" not in data:
-        from ..core.errors import ProblemError
-
-        raise ProblemError(f"{args.file}: no dataset 'q'")
     method = "enumerate" if args.all else args.method
     r = solve_lcp(data["M"], data["q"], method=method, tol=args.tol)
     if args.json:
@@ -65,10 +61,10 @@ def run_lcp(args) -> int:
 
 
 def run_classify(args) -> int:
-    from ..io.lcp_files import read_problem
+    from ..io.problem_files import read_problem
     from ..lcp.classes import classify
 
-    data = read_problem(args.file)
+    data = read_problem(args.file, names=("M",))
     c = classify(data["M"], exact_limit=args.exact_limit)
     rank0_print(json.dumps(c.to_dict(), indent=2, default=float) if args.json else c.report())
     return EXIT_OK

@@ -1,0 +1,6 @@
+"""Eigenvalue complementarity problems, EiCP and mixed MEiCP (DESIGN §3)."""
+
+from .problem import EiCPProblem, EiCPResult, EiCPSolution
+from .solve import available_methods, solve_eicp
+
+__all__ = ["EiCPProblem", "EiCPResult", "EiCPSolution", "available_methods", "solve_eicp"]

@@ -1,9 +1,11 @@
-"""Reading LCP (and matrix) problems from files.
+"""Reading LCP, matrix and EiCP problems from files.
 
 - Siconos' text ``.dat`` files (dense or sparse-block storage; format in
   ``shared/data/siconos-lcp/README.md``): :func:`read_siconos_lcp`.
 - HDF5 files with datasets ``M`` (dense) or a group ``M`` with ``data``, ``indices``,
-  ``indptr``, ``shape`` (CSR), and ``q``: :func:`read_hdf5_problem`.
+  ``indptr``, ``shape`` (CSR), and ``q`` (LCP) — or ``A``, ``B`` and optional ``J``
+  (EiCP): :func:`read_hdf5_problem`.
+- MATLAB ``.mat`` files (``scipy.io.loadmat``) with the same names, e.g. the EiCP test set.
 
 :func:`read_problem` picks by extension.  Errors name the file and what is wrong.
 """
@@ -132,7 +134,8 @@ def write_hdf5_problem(path, **arrays) -> None:
 
 
 def read_problem(path, names=("M", "q")) -> dict:
-    """An LCP/matrix problem from ``.dat`` (Siconos) or ``.h5``/``.hdf5`` by extension."""
+    """A problem from ``.dat`` (Siconos LCP), ``.h5``/``.hdf5`` or ``.mat`` by extension;
+    ``names``: the datasets wanted, the first two required."""
     path = Path(path)
     if not path.exists():
         raise ProblemError(f"{path}: no such file")
@@ -141,7 +144,14 @@ def read_problem(path, names=("M", "q")) -> dict:
         return {"M": M, "q": q, "remark": remark}
     if path.suffix in (".h5", ".hdf5"):
         data = read_hdf5_problem(path, names)
-        if "M" not in data:
-            raise ProblemError(f"{path}: no dataset 'M'")
-        return data
-    raise ProblemError(f"{path}: unknown file type {path.suffix!r} (expected .dat, .h5 or .hdf5)")
+    elif path.suffix == ".mat":
+        from scipy.io import loadmat
+
+        raw = loadmat(path)
+        data = {k: (raw[k] if sp.issparse(raw[k]) else np.asarray(raw[k], dtype=float)) for k in names if k in raw}
+    else:
+        raise ProblemError(f"{path}: unknown file type {path.suffix!r} (expected .dat, .h5, .hdf5 or .mat)")
+    missing = [k for k in names[:2] if k not in data]
+    if missing:
+        raise ProblemError(f"{path}: no dataset {missing[0]!r}")
+    return data

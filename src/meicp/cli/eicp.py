@@ -1,0 +1,55 @@
+"""``meicp eicp FILE``: an (M)EiCP from HDF5 or ``.mat`` (datasets ``A``, ``B``, optional ``J``)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ..core.log import rank0_print
+from .main import EXIT_FAILED, EXIT_OK
+
+
+def register(sub) -> None:
+    from ..eicp.solve import available_methods
+
+    p = sub.add_parser("eicp", help="solve the (mixed) eigenvalue complementarity problem (A, B, J) from a file")
+    p.add_argument("file", help="HDF5 (.h5) or MATLAB (.mat) with A, B and optional J (0-based indices)")
+    p.add_argument("--method", default="auto", choices=available_methods())
+    p.add_argument("--all", action="store_true", help="every solution (support enumeration, small |J|)")
+    p.add_argument("--lam-min", type=float, default=None, help="only solutions with λ ≥ this")
+    p.add_argument("--target", type=float, default=0.0, help="shift for the SLEPc solves (active-set)")
+    p.add_argument("--tol", type=float, default=1e-10, help="relative certificate tolerance")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from mpi4py import MPI
+
+    from ..eicp.solve import solve_eicp
+    from ..io.problem_files import read_problem
+
+    data = read_problem(args.file, names=("A", "B", "J"))
+    J = None if "J" not in data else np.asarray(data["J"]).ravel().astype(np.int64)
+    kwargs = {"target": args.target} if args.method in ("active-set", "auto") else {}
+    r = solve_eicp(data["A"], data["B"], J=J, method=args.method, all_solutions=args.all,
+                   lam_min=args.lam_min, tol=args.tol, comm=MPI.COMM_WORLD, **kwargs)
+    if args.json:
+        rank0_print(json.dumps({
+            "file": args.file, "method": r.method, "status": r.status, "success": r.success,
+            "message": r.message, "iterations": r.iterations, "timings": r.timings,
+            "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
+                           "x": s.x.tolist()} for s in r.solutions]}, indent=2))
+        return EXIT_OK if r.success or r.status == "no_solution" else EXIT_FAILED
+    n = np.shape(data["A"])[0]
+    rank0_print(f"EiCP from {args.file}: n = {n}, |J| = {n if J is None else J.size}")
+    rank0_print(r.summary())
+    if r.solutions:
+        rank0_print(f"{'λ':>22}  {'residual':>9}  {'|support|':>9}  support")
+        for s in r.solutions[:50]:
+            sup = s.support.tolist()
+            rank0_print(f"{s.lam:22.14g}  {s.residual:9.2e}  {len(sup):9d}  {sup[:12]}{' ...' if len(sup) > 12 else ''}")
+        if len(r.solutions) > 50:
+            rank0_print(f"... {len(r.solutions) - 50} more (use --json)")
+    return EXIT_OK if r.success or r.status == "no_solution" else EXIT_FAILED

@@ -1,0 +1,192 @@
+"""Active-set search for an MEiCP solution on large sparse or distributed pencils.
+
+An outer loop over supports ``S ⊆ J``; each step is one SLEPc solve of the reduced pencil
+on ``R = F ∪ S`` (:class:`~meicp.petsc.reduced_pencil.ReducedPencilSolver`: zeroed rows and
+columns, fixed pattern, reused symbolic factorisation, warm start).  From the wanted
+eigenpair (λ, ξ) — by default the largest real λ among the ``nev`` eigenvalues nearest
+the target, i.e. the fastest-growing mode of the instability problem — the support is
+updated:
+
+- ``ξ`` is oriented so that ``eᵀξ_S > 0``; indices of S with ``ξ_j < 0`` leave S;
+- indices of ``J∖S`` whose dual ``w_j = ((λB − A)ξ)_j`` is negative enter S.
+
+Both at once by default; a support seen before switches to single moves (the most
+violated index only), and when those revisit too the search stops with status
+``cycling``.  A pair with no violation is certified (:func:`certify_pair`) and returned.
+
+What the search proves: a returned solution is a certified solution; a failure proves
+nothing about existence — ``coverage`` lists the supports visited, and the message says so.
+Collective on the matrices' communicator; SciPy input runs on ``COMM_SELF``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..core.errors import ProblemError
+from ..core.validation import is_symmetric
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+
+
+def _petsc_pair(problem: EiCPProblem, comm):
+    from ..petsc.mat import mat_from_scipy
+
+    if problem.distributed:
+        return problem.A, problem.B, False
+    return mat_from_scipy(comm, problem.A), mat_from_scipy(comm, problem.B), True
+
+
+def _is_symmetric(problem: EiCPProblem) -> bool:
+    if problem.distributed:
+        a, b = problem.scales()
+        return bool(problem.A.isSymmetric(1e-13 * a) and problem.B.isSymmetric(1e-13 * max(b, 1e-300)))
+    return is_symmetric(problem.A, 1e-13) and is_symmetric(problem.B, 1e-13)
+
+
+def _spurious_value(problem: EiCPProblem, target: float) -> float:
+    """A value far below every eigenvalue of the pencil: removed DOFs get it, shift-and-invert
+    around ``target`` never returns it.  Bound: |λ| ≤ max_i Σ_j|A_ij| / min_i B_ii for a
+    diagonally dominant B; a generous multiple covers other B."""
+    a, b = problem.scales()
+    return target - 1e3 * (a / max(b, 1e-300)) * max(1.0, problem.n ** 0.5) - 1e3 * abs(target) - 1.0
+
+
+def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
+               lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
+               options: dict | None = None, prefix: str = "meicp_as_", **_ignored) -> EiCPResult:
+    """One certified MEiCP solution by the active-set search (see the module docstring).
+
+    target: shift of the eigen-solves; nev: eigenpairs per solve; lam_min: ignore eigenpairs
+    below it (e.g. 0 for divergence modes); support0: the starting S (default all of J);
+    options: PETSc options under ``prefix`` (a scene's ``[petsc]`` table)."""
+    t0 = time.perf_counter()
+    J, n = problem.J, problem.n
+    if support0 is None:
+        S = J.copy()
+    else:
+        S = np.intersect1d(np.asarray(support0, dtype=np.int64), J)
+    if problem.distributed:
+        comm = problem.A.getComm()
+    A, B, owned = _petsc_pair(problem, comm)
+    symmetric = _is_symmetric(problem)
+    solver = None
+    result = EiCPResult(method="active-set")
+    scales = problem.scales()
+    visited: set = set()
+    history = []
+    status, message = "max_iterations", f"no certified solution within {max_iter} support updates"
+    single_moves = False
+    initial = None
+    from ..petsc import import_petsc
+    from ..petsc.reduced_pencil import ReducedPencilSolver
+
+    PETSc = import_petsc()
+    try:
+
+        solver = ReducedPencilSolver(A, B, symmetric=symmetric, target=target,
+                                     spurious=_spurious_value(problem, target), nev=nev,
+                                     prefix=prefix, options=options)
+        for it in range(1, max_iter + 1):
+            key = S.tobytes()
+            visited.add(key)
+            if S.size == 0 and problem.F.size == 0:
+                status, message = "empty_support", "every complementarity index left the support"
+                break
+            removed = np.setdiff1d(J, S)
+            try:
+                pairs = solver.solve(removed, initial)
+            except PETSc.Error as exc:  # e.g. an exactly singular shifted matrix at the target
+                status = "petsc_error"
+                message = (f"SLEPc/PETSc error {exc.ierr} in eigen-solve {it} (support of size {S.size}); "
+                           f"a different target (-{prefix}eps_target) may avoid it")
+                break
+            if lam_min is not None:
+                pairs = [p for p in pairs if p[0] >= lam_min - tol]
+            if not pairs:
+                status = "not_converged"
+                message = (f"no real eigenpair{'' if lam_min is None else f' with λ ≥ {lam_min}'} among "
+                           f"the {nev} nearest the target {target} on support of size {S.size}")
+                break
+            # every returned pair is examined: a violation-free one (largest λ first) ends
+            # the search; otherwise the largest λ drives the support update
+            examined = sorted((_violations(problem, S, removed, lam, xi, scales) + (err,)
+                               for lam, xi, err in pairs), key=lambda v: -v[0])
+            clean = [v for v in examined if v[3].size == 0 and v[4].size == 0]
+            lam, xi, w, leave, enter, err = clean[0] if clean else examined[0]
+            initial = xi
+            xS, out = xi[S], removed
+            history.append({"iteration": it, "lam": lam, "support": int(S.size), "leave": int(leave.size),
+                            "enter": int(enter.size), "eps_residual": err})
+            if leave.size == 0 and enter.size == 0:
+                sol = certify_pair(problem, lam, xi, scales)
+                if sol.residual <= tol:
+                    result.solutions = [sol]
+                    status, message = "solved", f"certified after {it} eigen-solve(s)"
+                else:
+                    result.candidates = [sol]
+                    status = "certificate_failed"
+                    message = f"no sign or dual violation, but certificate residual {sol.residual:.2e} > {tol:.0e}"
+                break
+            S_next = np.union1d(np.setdiff1d(S, leave), enter)
+            if single_moves or S_next.tobytes() in visited:
+                single_moves = True
+                S_next = _single_move(S, xS, w, out, leave, enter, visited)
+                if S_next is None:
+                    status, message = "cycling", f"every support update from iteration {it} revisits a support"
+                    break
+            S = S_next
+        result.iterations = len(history)
+    finally:
+        if solver is not None:
+            result.coverage = {"supports_visited": len(visited), "eigen_solves": solver.solves,
+                               "eps_iterations": solver.eps_iterations, "history": history,
+                               "unused_options": solver.unused_options}
+            solver.destroy()
+        if owned:
+            A.destroy()
+            B.destroy()
+    result.status, result.message = status, message
+    if status != "solved":
+        result.message += (f"; {len(visited)} support(s) visited — this does not prove that no "
+                           f"solution exists (use method='enumerate' for small |J|)")
+    result.timings["solve"] = time.perf_counter() - t0
+    return result
+
+
+def _violations(problem, S, removed, lam, xi, scales):
+    """Orient ξ (eᵀξ_S > 0) and list the sign violations in S and dual violations off S."""
+    if (S.size and xi[S].sum() < 0) or (S.size == 0 and xi[np.argmax(np.abs(xi))] < 0):
+        xi = -xi
+    w = lam * _matvec(problem, "B", xi) - _matvec(problem, "A", xi)
+    scale_x = np.abs(xi).max()
+    s = scales[0] + abs(lam) * scales[1]
+    leave = S[xi[S] < -1e-9 * scale_x] if S.size else S
+    enter = removed[w[removed] < -1e-9 * s * scale_x] if removed.size else removed
+    return lam, xi, w, leave, enter
+
+
+def _single_move(S, xS, w, out, leave, enter, visited):
+    """The most violated single index moves (leaving first), avoiding visited supports."""
+    moves = []
+    if leave.size:
+        order = np.argsort(xS[np.isin(S, leave)])
+        moves += [("leave", j) for j in leave[order]]
+    if enter.size:
+        order = np.argsort(w[enter])
+        moves += [("enter", j) for j in enter[order]]
+    for kind, j in moves:
+        S_next = np.setdiff1d(S, [j]) if kind == "leave" else np.union1d(S, [j])
+        if S_next.tobytes() not in visited:
+            return S_next
+    return None
+
+
+def _matvec(problem: EiCPProblem, which: str, x: np.ndarray) -> np.ndarray:
+    M = problem.A if which == "A" else problem.B
+    if problem.distributed:
+        from ..petsc.lcp import matvec
+
+        return matvec(M, x)
+    return M @ x

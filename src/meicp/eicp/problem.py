@@ -1,0 +1,189 @@
+"""The (mixed) eigenvalue complementarity problem, its solutions and their certificates.
+
+Convention (DESIGN §3, seed 000 (2)-(3)): find λ ∈ ℝ and x ≠ 0 with
+
+    w = (λB − A)x,   x_J ≥ 0,  w_J ≥ 0,  x_Jᵀw_J = 0,   w_F = 0   (F = complement of J).
+
+The EiCP is J = all.  A solution is reported with ``‖x‖₂ = 1`` and the sign that makes
+``x_J ≥ 0`` (with ``eᵀx_J > 0`` when ``x_J ≠ 0``; when ``x_J = 0`` the sign is the one that
+makes ``w_J ≥ 0``, and if both do, the largest entry of x in magnitude is positive).  ``support`` = indices j ∈ J with ``x_j > 0``.
+
+Certificate (:func:`certify_pair`), all relative to ``s = max|A| + |λ|·max|B|`` with
+``w`` recomputed from A and B:
+
+    residual = max( ‖w_F ∪ S‖∞ / s,  max(0, −min x_J),  max(0, −min w_J) / s,  |x_Jᵀw_J| / s )
+
+(``w`` on the free set and on the support must vanish: that is the eigen-residual.)
+A pair whose residual exceeds ``tol`` is never reported as a solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..core.errors import ProblemError
+from ..core.results import Result
+from ..core.validation import as_index_set, as_matrix
+
+#: default relative certificate tolerance
+DEFAULT_TOL = 1e-10
+#: x_j above this (relative to ‖x‖∞) counts as in the support
+SUPPORT_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class EiCPProblem:
+    """Validated data: ``A``, ``B`` (ndarray or CSR, or PETSc Mat), ``J`` sorted indices."""
+
+    A: object
+    B: object
+    J: np.ndarray
+
+    @classmethod
+    def from_data(cls, A, B, J=None) -> "EiCPProblem":
+        if _is_petsc_mat(A) or _is_petsc_mat(B):
+            if not (_is_petsc_mat(A) and _is_petsc_mat(B)):
+                raise ProblemError("A and B must both be PETSc Mats or both NumPy/SciPy")
+            n = A.getSize()[0]
+            if A.getSize() != (n, n) or B.getSize() != (n, n):
+                raise ProblemError(f"A and B must be square of one size, got {A.getSize()} and {B.getSize()}")
+            return cls(A, B, as_index_set(J, n, "J"))
+        A = as_matrix(A, "A")
+        B = as_matrix(B, "B")
+        if A.shape != B.shape:
+            raise ProblemError(f"A and B must have the same shape, got {A.shape} and {B.shape}")
+        return cls(A, B, as_index_set(J, A.shape[0], "J"))
+
+    @property
+    def n(self) -> int:
+        return self.A.getSize()[0] if self.distributed else self.A.shape[0]
+
+    @property
+    def distributed(self) -> bool:
+        return _is_petsc_mat(self.A)
+
+    @property
+    def F(self) -> np.ndarray:
+        """The free indices (complement of J)."""
+        mask = np.ones(self.n, dtype=bool)
+        mask[self.J] = False
+        return np.flatnonzero(mask)
+
+    def scales(self) -> tuple[float, float]:
+        """``(max|A|, max|B|)``."""
+        return _max_abs(self.A), _max_abs(self.B)
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray]:
+        return _dense(self.A), _dense(self.B)
+
+    def residual_vector(self, lam: float, x: np.ndarray) -> np.ndarray:
+        """``w = (λB − A)x`` (gathered on every rank when distributed)."""
+        if self.distributed:
+            from ..petsc.lcp import matvec
+
+            return lam * matvec(self.B, x) - matvec(self.A, x)
+        return lam * (self.B @ x) - self.A @ x
+
+
+def _is_petsc_mat(M) -> bool:
+    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
+
+
+def _max_abs(M) -> float:
+    if _is_petsc_mat(M):
+        from ..petsc.lcp import max_abs_entry
+
+        return max_abs_entry(M)
+    data = M.data if sp.issparse(M) else np.asarray(M)
+    return float(np.max(np.abs(data))) if data.size else 0.0
+
+
+def _dense(M) -> np.ndarray:
+    if _is_petsc_mat(M):
+        from ..petsc.mat import mat_to_scipy
+
+        return mat_to_scipy(M).toarray()
+    return M.toarray() if sp.issparse(M) else np.asarray(M)
+
+
+@dataclass
+class EiCPSolution:
+    """One certified solution: λ, x (‖x‖₂ = 1), w = (λB − A)x, support ⊆ J, residual."""
+
+    lam: float
+    x: np.ndarray
+    w: np.ndarray
+    support: np.ndarray
+    residual: float
+
+    @property
+    def sigma(self) -> float:  # the instability problem's name for λ (σ = growth rate²)
+        return self.lam
+
+
+@dataclass
+class EiCPResult(Result):
+    """Result of :func:`meicp.solve_eicp`.
+
+    solutions: certified :class:`EiCPSolution` s, largest λ first.  status ``solved`` when at
+    least one was found; ``no_solution`` when the method proves there is none (enumeration)
+    in the requested λ window; other statuses are failures (``max_iterations``,
+    ``cycling``, ``not_converged``...), with what was reached in ``candidates``.
+    method: the method that produced the result; coverage: what was searched (supports
+    visited, eigen-solves), the evidence behind a ``no_solution``.
+    """
+
+    solutions: list = field(default_factory=list)
+    method: str = ""
+    candidates: list = field(default_factory=list)
+    coverage: dict = field(default_factory=dict)
+
+    @property
+    def lam(self) -> float | None:
+        return self.solutions[0].lam if self.solutions else None
+
+    def summary(self) -> str:
+        head = f"{self.method}: {self.status}, {len(self.solutions)} solution(s)"
+        if self.solutions:
+            lams = ", ".join(f"{s.lam:.10g}" for s in self.solutions[:6])
+            head += f" λ = {lams}{' ...' if len(self.solutions) > 6 else ''}; max residual " \
+                    f"{max(s.residual for s in self.solutions):.2e}"
+        return head + (f" — {self.message}" if self.message else "")
+
+
+def normalise(x: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """``‖x‖₂ = 1`` with the sign convention of the module docstring."""
+    x = np.asarray(x, dtype=np.float64)
+    nrm = np.linalg.norm(x)
+    if nrm == 0 or not np.isfinite(nrm):
+        return x
+    x = x / nrm
+    xJ = x[J]
+    s = float(xJ.sum()) if J.size else 0.0
+    if abs(s) <= SUPPORT_TOL * np.abs(x).max():
+        s = x[np.argmax(np.abs(x))]
+    return -x if s < 0 else x
+
+
+def certify_pair(problem: EiCPProblem, lam: float, x: np.ndarray,
+                 scales: tuple[float, float] | None = None) -> EiCPSolution:
+    """Normalise x, recompute w and the certificate residual (see module docstring)."""
+    J = problem.J
+    x = normalise(x, J)
+    w = problem.residual_vector(lam, x)
+    a, b = scales or problem.scales()
+    s = max(a + abs(lam) * b, np.finfo(float).tiny)
+    support = J[x[J] > SUPPORT_TOL * max(np.abs(x).max(), np.finfo(float).tiny)] if J.size else J
+    if J.size and support.size == 0 and w[J].min() < -w[J].max():
+        x, w = -x, -w  # x_J = 0 leaves the sign free: it is the one that makes w_J ≥ 0
+    must_vanish = np.ones(problem.n, dtype=bool)
+    must_vanish[J] = False
+    must_vanish[support] = True
+    parts = [float(np.abs(w[must_vanish]).max()) / s if must_vanish.any() else 0.0]
+    if J.size:
+        parts += [max(0.0, -float(x[J].min())), max(0.0, -float(w[J].min())) / s,
+                  abs(float(x[J] @ w[J])) / s]
+    return EiCPSolution(float(lam), x, w, support, max(parts))

@@ -1,0 +1,131 @@
+"""Eigenpairs of a pencil restricted to a changing index set, with SLEPc, cheaply.
+
+The active-set EiCP solver asks many times for eigenpairs of ``(A_RR, B_RR)`` with
+``R = F ∪ S`` and S changing a few indices at a time.  Instead of extracting submatrices,
+the removed rows and columns are zeroed in work copies of A and B (same size, same
+nonzero pattern) with ``A_ii = α``, ``B_ii = 1`` on them: the pencil then has the reduced
+pencil's eigenpairs (eigenvectors zero on the removed set) plus a spurious eigenvalue α
+placed far from the target, where shift-and-invert never looks.  Because the pattern
+never changes, MUMPS' symbolic factorisation is reused and only the numeric one is redone;
+the previous wanted eigenvector is the next solve's initial space.
+
+Options live under a prefix (default ``meicp_as_``): ``eps_*``, ``st_*`` — e.g.
+``-meicp_as_eps_nev 8 -meicp_as_st_pc_factor_mat_solver_type superlu_dist``.  Collective.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import import_petsc, import_slepc
+from .mat import vec_to_numpy
+from .options import OptionsScope
+
+
+class ReducedPencilSolver:
+    """Shift-and-invert SLEPc solves of ``A ξ = λ B ξ`` on ``R = complement of removed``.
+
+    A, B: PETSc Mats (same layout).  symmetric: both symmetric (GHEP) or not (GNHEP).
+    target: the shift τ; pairs are returned nearest τ in real part.  spurious: the value α
+    given to removed DOFs.  Call :meth:`destroy` (collective) when done.
+    """
+
+    def __init__(self, A, B, *, symmetric: bool, target: float, spurious: float, nev: int = 4,
+                 prefix: str = "meicp_as_", options: dict | None = None):
+        PETSc = import_petsc()
+        SLEPc = import_slepc()
+        # A and B copied into their union pattern, so that (A − τB) and the zeroed work
+        # copies all share one pattern and MUMPS' symbolic factorisation can be reused
+        self.A, self.B = _in_union_pattern(A, B), _in_union_pattern(B, A)
+        self.Aw = self.A.duplicate(copy=True)
+        self.Bw = self.B.duplicate(copy=True)
+        self.symmetric = symmetric
+        self.target, self.spurious = float(target), float(spurious)
+        self.prefix = prefix
+        self.eps = SLEPc.EPS().create(comm=A.getComm())
+        defaults = {
+            "eps_nev": nev,
+            "eps_target": self.target,
+            "eps_target_real": True,
+            "eps_tol": 1e-12,
+            "eps_max_it": 1000,
+            "st_type": "sinvert",
+            "st_ksp_type": "preonly",
+            "st_pc_type": "lu",
+            "st_pc_factor_mat_solver_type": "mumps",
+        }
+        defaults["eps_gen_hermitian" if symmetric else "eps_gen_non_hermitian"] = True
+        self._defaults = defaults
+        self._options = options
+        self.eps.setOptionsPrefix(prefix)
+        st = self.eps.getST()
+        st.setMatStructure(PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.unused_options: list = []
+        self.solves = 0
+        self.eps_iterations = 0
+        self._configured = False
+
+    def solve(self, removed: np.ndarray, initial: np.ndarray | None = None):
+        """Converged real eigenpairs ``[(λ, ξ, relative_residual)]`` of the pencil without
+        the ``removed`` DOFs (global indices, same on every rank), nearest the target first.
+        ξ is a NumPy array on every rank.  Collective."""
+        PETSc = import_petsc()
+        SLEPc = import_slepc()
+        same = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+        self.A.copy(self.Aw, structure=same)
+        self.B.copy(self.Bw, structure=same)
+        lo, hi = self.Aw.getOwnershipRange()
+        mine = removed[(removed >= lo) & (removed < hi)].astype(PETSc.IntType)
+        self.Aw.zeroRowsColumns(mine, diag=self.spurious)
+        self.Bw.zeroRowsColumns(mine, diag=1.0)
+        self.eps.setOperators(self.Aw, self.Bw)
+        if initial is not None:
+            v = self.Aw.createVecRight()
+            v.setArray(initial[lo:hi])
+            self.eps.setInitialSpace([v])
+        if not self._configured:
+            with OptionsScope(self.prefix, self._defaults, self._options) as scope:
+                self.eps.setFromOptions()
+                self.eps.setUp()
+            self.unused_options = scope.unused
+            self._configured = True
+        self.eps.solve()
+        self.solves += 1
+        self.eps_iterations += self.eps.getIterationNumber()
+        pairs = []
+        xr, xi = self.Aw.createVecRight(), self.Aw.createVecRight()
+        removed_set = np.zeros(self.Aw.getSize()[0], dtype=bool)
+        removed_set[removed] = True
+        for i in range(self.eps.getConverged()):
+            lam = self.eps.getEigenpair(i, xr, xi)
+            if abs(lam.imag) > 1e-10 * max(1.0, abs(lam.real)):
+                continue  # complex pair: no real eigenvector
+            x = vec_to_numpy(xr)
+            nrm = np.abs(x).max()
+            if removed.size and np.abs(x[removed_set]).max() > 1e-6 * nrm:
+                continue  # a spurious pair living on the removed DOFs
+            err = self.eps.computeError(i, SLEPc.EPS.ErrorType.RELATIVE)
+            pairs.append((float(lam.real), x, float(err)))
+        xr.destroy()
+        xi.destroy()
+        return pairs
+
+    def destroy(self) -> None:
+        """Free the EPS and work matrices (collective).  After a failed solve SLEPc may refuse
+        to destroy its half-built state; that is ignored (a leak, not a wrong answer)."""
+        PETSc = import_petsc()
+        for obj in (self.eps, self.Aw, self.Bw, self.A, self.B):
+            try:
+                obj.destroy()
+            except PETSc.Error:
+                pass
+
+
+def _in_union_pattern(X, Y):
+    """A copy of X whose nonzero pattern is the union of X's and Y's (exact values of X)."""
+    PETSc = import_petsc()
+    U = X.duplicate(copy=True)
+    U.axpy(1.0, Y, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    U.zeroEntries()
+    U.axpy(1.0, X, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+    return U
