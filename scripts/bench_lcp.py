@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from meicp.io.lcp_files import read_siconos_lcp  # noqa: E402
+from meicp.io.problem_files import read_siconos_lcp  # noqa: E402
 from meicp.lcp.problem import LCPProblem, relative_residual  # noqa: E402
 from meicp.lcp.solve import solve_lcp  # noqa: E402
 from meicp.petsc.selfcheck import laplacian_rows  # noqa: E402
