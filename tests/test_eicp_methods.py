@@ -28,7 +28,7 @@ import scipy.sparse as sp
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from meicp.core.errors import ProblemError
-from meicp.eicp.problem import EiCPProblem, certify_pair
+from meicp.eicp.problem import EiCPProblem
 from meicp.eicp.rayleigh import project_simplex, rayleigh
 from meicp.eicp.semismooth import semismooth
 
@@ -184,7 +184,8 @@ def test_rayleigh_large_sparse_polishes_with_eigsh():
     n = 2500
     A = sp.diags([-np.ones(n - 1), np.full(n, 2.0), -np.ones(n - 1)], [-1, 0, 1], format="csr")
     B = sp.identity(n, format="csr")
-    result = rayleigh(EiCPProblem.from_data(A, B), sense="min", n_starts=1)
+    # SPG alone crawls here (4e-8 after 5000 steps); the support is right early, polish does the rest
+    result = rayleigh(EiCPProblem.from_data(A, B), sense="min", n_starts=1, max_iter=300)
     full = [s for s in result.solutions if s.support.size == n]
     assert full and full[0].lam == pytest.approx(2 - 2 * math.cos(math.pi / (n + 1)), abs=1e-12)
     assert full[0].residual <= TOL
@@ -355,3 +356,26 @@ def test_niu_semismooth_never_claims_an_uncertified_solution():
     # the two the README reports for a plain semismooth approach (measured here: rsls with
     # full Newton steps also solves both RANDEICP problems, 4 of 6; ssls 1 of 6)
     assert {"NEP_rdb200.mtx.mat", "NEP_tub100.mtx.mat"} <= set(solved.get("vinewtonrsls", []))
+
+
+@pytest.mark.skipif(len(NIU) != 6, reason="shared/data/eicp-niu not present")
+@pytest.mark.parametrize("path", NIU, ids=[os.path.basename(f) for f in NIU])
+def test_niu_semismooth_polishes_from_the_rayleigh_solution(path):
+    """Third opinion: Newton started 1e-3 away from SPG's solution (same zeros) returns it."""
+    problem, _ = _niu(path)
+    best = rayleigh(problem, n_starts=2).solutions[0]
+    x0 = best.x * (1 + 1e-3 * np.cos(np.arange(problem.n)))
+    again = semismooth(problem, x0=x0, lam0=best.lam * (1 + 1e-3))
+    assert again.success and again.lam == pytest.approx(best.lam, rel=1e-12)
+    assert np.abs(again.solutions[0].x - best.x).max() <= 1e-8
+
+
+def test_through_solve_eicp_and_lam_min():
+    from meicp import solve_eicp
+
+    ray = solve_eicp(EXAMPLE_A, np.eye(2), method="rayleigh", sense="both", lam_min=-2.5)
+    assert [s.lam for s in ray.solutions] == pytest.approx([-1.0, -2.0])
+    newton = solve_eicp(EXAMPLE_A, np.eye(2), method="semismooth", lam_min=-2.5)  # finds −2.618
+    assert newton.status == "not_found" and not newton.solutions
+    assert newton.candidates[0].lam == pytest.approx(EXAMPLE_LAMS[2])
+    assert solve_eicp(EXAMPLE_A, np.eye(2), method="semismooth", x0=[1, 0], lam_min=-2.5).lam == -1.0

@@ -88,6 +88,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
         solver = ReducedPencilSolver(A, B, symmetric=symmetric, target=target,
                                      spurious=_spurious_value(problem, target), nev=nev,
                                      prefix=prefix, options=options)
+        result.timings["setup"] = time.perf_counter() - t0
         for it in range(1, max_iter + 1):
             key = S.tobytes()
             visited.add(key)
@@ -95,6 +96,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                 status, message = "empty_support", "every complementarity index left the support"
                 break
             removed = np.setdiff1d(J, S)
+            t_solve = time.perf_counter()
             try:
                 pairs = solver.solve(removed, initial)
             except PETSc.Error as exc:  # e.g. an exactly singular shifted matrix at the target
@@ -118,7 +120,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
             initial = xi
             xS, out = xi[S], removed
             history.append({"iteration": it, "lam": lam, "support": int(S.size), "leave": int(leave.size),
-                            "enter": int(enter.size), "eps_residual": err})
+                            "enter": int(enter.size), "eps_residual": err,
+                            "seconds": time.perf_counter() - t_solve})
             if leave.size == 0 and enter.size == 0:
                 sol = certify_pair(problem, lam, xi, scales)
                 if sol.residual <= tol:

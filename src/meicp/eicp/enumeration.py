@@ -28,7 +28,7 @@ from scipy.optimize import linprog
 
 from ..core.errors import ProblemError
 from ..core.validation import is_symmetric
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_batch
 
 MAX_J = 24
 #: supports solved per stack (bounds memory: BATCH · |R|² doubles several times)
@@ -56,11 +56,12 @@ class _Enumerator:
         self.A, self.B = problem.dense()
         self.J, self.F = problem.J, problem.F
         self.symmetric = is_symmetric(self.A, 1e-13) and is_symmetric(self.B, 1e-13)
+        self.diagonal_B = not np.any(self.B - np.diag(np.diagonal(self.B)))
         self.tol = tol
         self.lam_min = -np.inf if lam_min is None else lam_min
         self.lam_max = np.inf if lam_max is None else lam_max
         self.scales = problem.scales()
-        self.found: list = []
+        self.rows: list = []
         self.seen: set = set()
         self.eigen_solves = 0
         self.slow_path = 0
@@ -87,7 +88,14 @@ class _Enumerator:
                 return self._one_by_one(supports)
         else:
             try:
-                lam, V = np.linalg.eig(np.linalg.solve(BR, AR))
+                if self.diagonal_B:  # B_RR⁻¹A_RR by row scaling (batched solves are slow
+                    #                   under a threaded BLAS)
+                    Bd = np.diagonal(BR, axis1=1, axis2=2)
+                    if np.any(Bd == 0):
+                        raise np.linalg.LinAlgError("singular diagonal B_RR")
+                    lam, V = np.linalg.eig(AR / Bd[:, :, None])
+                else:
+                    lam, V = np.linalg.eig(np.linalg.solve(BR, AR))
             except np.linalg.LinAlgError:
                 return self._one_by_one(supports)
             real = np.abs(lam.imag) <= 1e-10 * np.maximum(1.0, np.abs(lam.real))
@@ -111,10 +119,11 @@ class _Enumerator:
             sign_ok = np.ones(lam.shape, dtype=bool)
         window = (lam >= self.lam_min - self.tol) & (lam <= self.lam_max + self.tol)
         cand = sign_ok & window & np.isfinite(lam) & ~slow[:, None]
-        for c, i in zip(*np.nonzero(cand)):
-            x = np.zeros(self.problem.n)
-            x[R[c]] = V[c, :, i]
-            self._accept(lam[c, i], x)
+        cs, ii = np.nonzero(cand)
+        if cs.size:
+            X = np.zeros((cs.size, self.problem.n))
+            np.put_along_axis(X, R[cs], V[cs, :, ii], axis=1)
+            self._accept(lam[cs, ii], X)
         for c in np.flatnonzero(slow):
             self._one_support(R[c], k - nF)
 
@@ -161,18 +170,26 @@ class _Enumerator:
                     continue
                 x = np.zeros(self.problem.n)
                 x[R] = xi
-                self._accept(lam_refined, x)
+                self._accept(np.array([lam_refined]), x[None, :])
 
-    def _accept(self, lam: float, x: np.ndarray) -> None:
-        sol = certify_pair(self.problem, lam, x, self.scales)
-        if sol.residual > self.tol:
-            return
-        # distinct supports give distinct solutions; one support gives one per eigenvalue
-        key = (tuple(sol.support.tolist()), float(f"{sol.lam:.9g}"))
-        if key in self.seen:
-            return
-        self.seen.add(key)
-        self.found.append(sol)
+    def _accept(self, lams: np.ndarray, X: np.ndarray) -> None:
+        """Certify a stack of candidates; keep the passing ones not seen before (a support
+        gives one solution per eigenvalue; ±ξ on an empty support are one solution)."""
+        X, W, in_support, res = certify_batch(self.problem, lams, X, self.scales)
+        for r in np.flatnonzero(res <= self.tol):
+            key = (in_support[r].tobytes(), float(f"{lams[r]:.9g}"))
+            if key in self.seen:
+                continue
+            self.seen.add(key)
+            self.rows.append((lams[r], X[r], W[r], in_support[r], res[r]))
+
+    def arrays(self):
+        """The accepted solutions as stacked arrays (cheap to gather across ranks)."""
+        n, nJ = self.problem.n, self.J.size
+        if not self.rows:
+            return np.zeros(0), np.zeros((0, n)), np.zeros((0, n)), np.zeros((0, nJ), bool), np.zeros(0)
+        lams, X, W, masks, res = zip(*self.rows)
+        return np.array(lams), np.array(X), np.array(W), np.array(masks), np.array(res)
 
 
 def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=None, lam_max=None,
@@ -189,13 +206,15 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     for k in range(J.size + 1):
         for chunk in _batches(_combinations(J, k, rank, size), BATCH):
             e.run_stack(chunk)
-    found, solves, slow = e.found, e.eigen_solves, e.slow_path
+    lams, X, W, masks, res = e.arrays()
+    solves, slow = e.eigen_solves, e.slow_path
     if size > 1:
-        gathered = comm.allgather(found)
-        found = [s for part in gathered for s in part]
+        parts = comm.allgather((lams, X, W, masks, res))
+        lams, X, W, masks, res = (np.concatenate([p[k] for p in parts]) for k in range(5))
         solves = comm.allreduce(solves)
         slow = comm.allreduce(slow)
-    found.sort(key=lambda s: (-s.lam, tuple(s.support)))
+    order = np.lexsort((np.arange(lams.size), -lams))
+    found = [EiCPSolution(float(lams[r]), X[r], W[r], J[masks[r]], float(res[r])) for r in order]
     result = EiCPResult(method="enumerate", solutions=found, iterations=solves)
     result.coverage = {"supports": 2 ** J.size, "eigen_solves": solves, "one_by_one": slow, "ranks": size,
                        "window": (lam_min, lam_max)}

@@ -154,36 +154,48 @@ class EiCPResult(Result):
         return head + (f" — {self.message}" if self.message else "")
 
 
-def normalise(x: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """``‖x‖₂ = 1`` with the sign convention of the module docstring."""
-    x = np.asarray(x, dtype=np.float64)
-    nrm = np.linalg.norm(x)
-    if nrm == 0 or not np.isfinite(nrm):
-        return x
-    x = x / nrm
-    xJ = x[J]
-    s = float(xJ.sum()) if J.size else 0.0
-    if abs(s) <= SUPPORT_TOL * np.abs(x).max():
-        s = x[np.argmax(np.abs(x))]
-    return -x if s < 0 else x
+def certify_batch(problem: EiCPProblem, lams: np.ndarray, X: np.ndarray,
+                  scales: tuple[float, float] | None = None):
+    """Normalise the rows of X (m × n), recompute ``W = (λB − A)X`` and the certificates.
+
+    Returns ``(X, W, in_support, residuals)`` with ``in_support`` an (m × |J|) mask.  The
+    sign convention and the residual are those of the module docstring; one vectorised
+    implementation serves single pairs (:func:`certify_pair`) and the enumeration's stacks.
+    """
+    J = problem.J
+    lams = np.asarray(lams, dtype=np.float64)
+    X = np.array(X, dtype=np.float64, ndmin=2)
+    X /= np.linalg.norm(X, axis=1, keepdims=True)
+    xmax = np.abs(X).max(axis=1)
+    sJ = X[:, J].sum(axis=1) if J.size else np.zeros(len(X))
+    biggest = X[np.arange(len(X)), np.argmax(np.abs(X), axis=1)]
+    flip = np.where(np.abs(sJ) > SUPPORT_TOL * xmax, sJ < 0, biggest < 0)
+    X[flip] *= -1
+    if problem.distributed:
+        W = np.array([problem.residual_vector(l, x) for l, x in zip(lams, X)])
+    else:
+        W = lams[:, None] * np.asarray(problem.B @ X.T).T - np.asarray(problem.A @ X.T).T
+    in_support = X[:, J] > SUPPORT_TOL * xmax[:, None]
+    if J.size:
+        # x_J = 0 leaves the sign free: it is the one that makes w_J ≥ 0
+        empty = ~in_support.any(axis=1)
+        refl = empty & (W[:, J].min(axis=1) < -W[:, J].max(axis=1))
+        X[refl] *= -1
+        W[refl] *= -1
+    a, b = scales or problem.scales()
+    s = np.maximum(a + np.abs(lams) * b, np.finfo(float).tiny)
+    must_vanish = np.ones(X.shape, dtype=bool)
+    must_vanish[:, J] = in_support
+    res = np.where(must_vanish, np.abs(W), 0.0).max(axis=1) / s
+    if J.size:
+        xJ, wJ = X[:, J], W[:, J]
+        res = np.maximum.reduce([res, np.maximum(0.0, -xJ.min(axis=1)), np.maximum(0.0, -wJ.min(axis=1)) / s,
+                                 np.abs(np.einsum("ij,ij->i", xJ, wJ)) / s])
+    return X, W, in_support, res
 
 
 def certify_pair(problem: EiCPProblem, lam: float, x: np.ndarray,
                  scales: tuple[float, float] | None = None) -> EiCPSolution:
     """Normalise x, recompute w and the certificate residual (see module docstring)."""
-    J = problem.J
-    x = normalise(x, J)
-    w = problem.residual_vector(lam, x)
-    a, b = scales or problem.scales()
-    s = max(a + abs(lam) * b, np.finfo(float).tiny)
-    support = J[x[J] > SUPPORT_TOL * max(np.abs(x).max(), np.finfo(float).tiny)] if J.size else J
-    if J.size and support.size == 0 and w[J].min() < -w[J].max():
-        x, w = -x, -w  # x_J = 0 leaves the sign free: it is the one that makes w_J ≥ 0
-    must_vanish = np.ones(problem.n, dtype=bool)
-    must_vanish[J] = False
-    must_vanish[support] = True
-    parts = [float(np.abs(w[must_vanish]).max()) / s if must_vanish.any() else 0.0]
-    if J.size:
-        parts += [max(0.0, -float(x[J].min())), max(0.0, -float(w[J].min())) / s,
-                  abs(float(x[J] @ w[J])) / s]
-    return EiCPSolution(float(lam), x, w, support, max(parts))
+    X, W, in_support, res = certify_batch(problem, np.array([lam]), np.asarray(x)[None, :], scales)
+    return EiCPSolution(float(lam), X[0], W[0], problem.J[in_support[0]], float(res[0]))

@@ -4,12 +4,17 @@ Why this works.  For symmetric A, B with B SPD let ``r(x) = xᵀAx / xᵀBx``; i
 ``∇r(x) = 2 (A − r(x) B) x / xᵀBx`` is orthogonal to x (r is homogeneous of degree 0).
 
 * EiCP (J = all), feasible set the simplex Δ = {x ≥ 0, eᵀx = 1}.  The KKT conditions of
-  max (or min) r on Δ read ``∓∇r(x) = μe − ν`` with ``ν ≥ 0, νᵀx = 0``; multiplying by xᵀ
-  gives μ = 0, hence ``w = (r B − A) x = ±(xᵀBx / 2) ν`` — for a maximiser ``w ≥ 0, xᵀw = 0``:
-  (λ, x) = (r(x), x) solves the EiCP, and conversely every EiCP solution is a KKT point.
+  max r (of min r) on Δ read ``∇r(x) = μe − ν`` (``μe + ν``) with ``ν ≥ 0, νᵀx = 0``;
+  multiplying by xᵀ gives μ = 0, hence ``w = (r B − A) x = (xᵀBx / 2) ν`` (``−(xᵀBx / 2) ν``)
+  — for max r, ``w ≥ 0, xᵀw = 0``:
+  (λ, x) = (r(x), x) solves the EiCP, and conversely every EiCP solution is a KKT point of
+  *max* r.  The sign matters: KKT points of *min* r have ``w ≤ 0`` off the support, so
+  they solve this EiCP only where w vanishes there — generically when the support is full
+  (x_J > 0), e.g. the full-support λ_min(B⁻¹A) of a Z-matrix A.  ``sense="min"`` is kept
+  for those; measured on 300 random problems (n ≤ 6) it found nothing in 188 of them.
 * MEiCP (free set F ≠ ∅), feasible set the cone K = {x_J ≥ 0} without 0.  The same
   argument with the multiplier ν supported on J gives ``w_F = 0``, ``w_J ≥ 0 ⊥ x_J``:
-  stationary points of r on K (any scaling) are exactly the MEiCP solutions, including
+  KKT points of max r on K (any scaling) are exactly the MEiCP solutions, including
   those with x_J = 0.  We run the projected method on the (convex) cone and, because r does
   not see the scale, rescale each iterate to ``‖x‖₂ = 1`` so it can neither vanish nor blow up.
 
@@ -59,8 +64,10 @@ def rayleigh(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 
     starts: optional list of start vectors (projected onto the feasible set); otherwise
         ``n_starts`` starts: the uniform vector, vertices e_i with the largest (``sense="min"``:
         smallest) ``A_ii / B_ii``, and random points (``seed``).
-    sense: ``"max"`` ascends r (finds the largest-λ-type stationary points), ``"min"``
-        descends, ``"both"`` runs every start both ways.
+    sense: ``"max"`` ascends r: its limits are KKT points of max r, which are exactly the
+        solutions (local maxima of r on the feasible set; saddles only by luck, through the
+        polish of supports met on the way).  ``"min"`` descends: its limits are solutions
+        only when they have full support (see the module docstring).  ``"both"``: both.
     max_iter: SPG iterations per start; ``spg_tol``: relative stationarity at which SPG stops
         and hands its support to the polisher.  ``lam_min`` drops solutions with λ < lam_min.
 

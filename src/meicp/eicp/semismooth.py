@@ -27,7 +27,7 @@ ATOL_FACTOR = 1e-13
 
 def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=None,
                max_iter: int = 200, snes_type: str = "vinewtonrsls", options: dict | None = None,
-               **_) -> EiCPResult:
+               lam_min: float | None = None, **_) -> EiCPResult:
     """One certified (M)EiCP solution by semismooth / reduced-space Newton from (x0, lam0).
 
     x0: start vector (default: uniform on J, zero on F; the normalised all-ones vector when
@@ -35,6 +35,11 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
     lam0: start eigenvalue (default: the Rayleigh quotient ``x0ᵀAx0 / x0ᵀBx0``).
     snes_type: ``vinewtonrsls`` (reduced space, default) or ``vinewtonssls`` (semismooth,
         Fischer–Burmeister); ``options``: extra PETSc options under ``-meicp_eicp_vi_``.
+        The reduced-space method reads the active set off ``x_j = 0``: give it a start with
+        zeros where the solution has them (a small positive x_j there often sends it to
+        another solution); ``vinewtonssls`` tolerates such starts.
+    lam_min: a solution with λ < lam_min is not reported (status ``not_found``, the pair in
+        ``candidates``): Newton cannot be steered by it, only filtered.
     """
     if snes_type not in ("vinewtonrsls", "vinewtonssls"):
         raise ProblemError(f"snes_type must be 'vinewtonrsls' or 'vinewtonssls', got {snes_type!r}")
@@ -66,7 +71,12 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
             result.message = f"SNES {snes_type} reached a certified solution ({reason})"
         else:
             result.candidates = [sol]
-    if not result.solutions:
+    if result.solutions and lam_min is not None and result.lam < lam_min:
+        result.candidates, result.solutions = result.solutions, []
+        result.status = "not_found"
+        result.message = (f"SNES {snes_type} reached a certified solution with λ = "
+                          f"{result.candidates[0].lam:.10g} < lam_min = {lam_min:g} (in candidates)")
+    elif not result.solutions:
         if converged and finite:
             result.status = "certificate_failed"
             result.message = (f"SNES {snes_type} reported convergence ({reason}) but the iterate "
