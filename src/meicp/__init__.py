@@ -17,8 +17,11 @@ from .lcp.game import GameValue, game_value  # noqa: E402
 from .io.scene import Scene, load_scene  # noqa: E402
 from .lattice.assembly import assemble  # noqa: E402
 from .lattice.model import LatticeModel  # noqa: E402
+from .contact.instability import analyze, critical_friction  # noqa: E402
+from .contact.result import InstabilityResult, Mode  # noqa: E402
 
 __all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
            "classify", "MatrixClasses", "game_value", "GameValue",
            "load_scene", "Scene", "assemble", "LatticeModel",
-           "solve_eicp", "EiCPResult", "EiCPSolution"]
+           "solve_eicp", "EiCPResult", "EiCPSolution",
+           "analyze", "critical_friction", "InstabilityResult", "Mode"]

@@ -31,8 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     # each subcommand lives in its own module with register(subparsers)
-    from . import eicp, info, lattice, lcp
-    for module in (info, lcp, eicp, lattice):
+    from . import eicp, info, lattice, lcp, solve
+    for module in (solve, info, lcp, eicp, lattice):
         module.register(sub)
     return parser
 

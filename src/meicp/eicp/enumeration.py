@@ -35,6 +35,14 @@ MAX_J = 24
 BATCH = 20000
 
 
+def _distinct(values: np.ndarray) -> np.ndarray:
+    """Sorted values with near-duplicates (relative 1e-10) merged into their mean."""
+    if values.size == 0:
+        return values
+    groups = np.split(values, np.flatnonzero(np.diff(values) > 1e-10 * np.maximum(1.0, np.abs(values[1:]))) + 1)
+    return np.array([g.mean() for g in groups])
+
+
 def _combinations(J, k, rank, size):
     for idx, S in enumerate(itertools.combinations(J, k)):
         if idx % size == rank:
@@ -138,18 +146,20 @@ class _Enumerator:
         AR, BR = self.A[np.ix_(R, R)], self.B[np.ix_(R, R)]
         lam, V = scipy.linalg.eig(AR, BR)
         finite = np.isfinite(lam) & (np.abs(lam.imag) <= 1e-10 * np.maximum(1.0, np.abs(lam.real)))
-        values = np.unique(np.round(lam.real[finite], 10))
+        values = _distinct(np.sort(lam.real[finite]))
         nF = self.F.size
         out = np.setdiff1d(self.J, R[nF:])
+        scale_A, scale_B = self.scales
         for value in values:
             if not (self.lam_min - self.tol <= value <= self.lam_max + self.tol):
                 continue
-            # eigenspace basis: null space of (A_RR − λB_RR)
+            # eigenspace basis: null space of (A_RR − λB_RR), to the pencil's scale (an
+            # absolute threshold: a relative one is meaningless for a 1 × 1 block)
             Mv = AR - value * BR
-            basis = scipy.linalg.null_space(Mv, rcond=1e-9)
+            _, sv, Vh = np.linalg.svd(Mv)
+            basis = Vh[sv <= 1e-9 * (scale_A + abs(value) * scale_B)].T
             if basis.shape[1] == 0:
                 continue
-            lam_refined = value
             if basis.shape[1] == 1:
                 vecs = [basis[:, 0], -basis[:, 0]]
             else:  # LP: ξ = Bc, ξ_S ≥ 1, (λB − A)_{out,R} ξ ≥ 0
@@ -170,7 +180,7 @@ class _Enumerator:
                     continue
                 x = np.zeros(self.problem.n)
                 x[R] = xi
-                self._accept(np.array([lam_refined]), x[None, :])
+                self._accept(np.array([value]), x[None, :])
 
     def _accept(self, lams: np.ndarray, X: np.ndarray) -> None:
         """Certify a stack of candidates; keep the passing ones not seen before (a support

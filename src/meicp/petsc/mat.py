@@ -73,3 +73,20 @@ def vec_to_numpy(v) -> np.ndarray:
     if comm.Get_size() == 1:
         return local
     return np.concatenate(comm.allgather(local))
+
+
+def mat_from_rows(comm, local_rows: sp.csr_matrix, shape: tuple[int, int], local_cols: int):
+    """A rectangular AIJ matrix: this rank's rows ``local_rows`` (all global columns) and
+    ``local_cols`` columns in the column layout (the row layout of the matrix it multiplies
+    from the right).  Collective."""
+    PETSc = import_petsc()
+    pcomm = to_petsc_comm(comm)
+    local_rows = sp.csr_matrix(local_rows, dtype=PETSc.ScalarType)
+    local_rows.sort_indices()
+    A = PETSc.Mat().createAIJ(
+        size=((local_rows.shape[0], shape[0]), (local_cols, shape[1])),
+        csr=(local_rows.indptr.astype(PETSc.IntType), local_rows.indices.astype(PETSc.IntType),
+             local_rows.data),
+        comm=pcomm)
+    A.assemble()
+    return A

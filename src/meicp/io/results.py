@@ -1,0 +1,594 @@
+"""Everything ``meicp solve`` leaves on disk: :func:`write_results`.
+
+In the output directory::
+
+    results.h5      the scene, versions, contact states and forces, modes, verdict (below)
+    lattice.h5      the lattice (:func:`~meicp.io.lattice_output.write_lattice`) with node
+    lattice.xdmf    fields ``mode_0``, ``mode_1``... (each scaled as in the PNG),
+                    ``contact_state`` and ``static_u`` (the static displacement, when solved):
+                    open the .xdmf in ParaView, Warp By Vector with ``mode_k`` (scale 1 = the
+                    PNG's picture)
+    mode.png        the fastest mode on the deformed lattice (or the "stable" lattice)
+    contacts.png    states (and forces) along each contact line (only when there is one)
+
+``results.h5`` layout (strings are UTF-8; ``None`` is never stored: absent means unknown):
+
+=================================  ==========================================================
+``/`` attributes                   ``format = "meicp-results"``, ``format_version``,
+                                   ``meicp_version``, ``title``, ``source``, ``created``,
+                                   ``status``, ``success``, ``message``, ``iterations``,
+                                   ``residual``, ``verdict`` (stable | unstable | undecided),
+                                   ``stable`` (1 | 0 | -1 for undecided), ``evidence``,
+                                   ``n_modes``, ``ranks``
+``/scene``                         the scene as TOML text (the file's own text when known,
+                                   else regenerated from the parsed scene)
+``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
+                                   boundary_<side>, base_friction; ``layers/{name, rows,
+                                   stiffness, density}``, ``interfaces/{below, kind,
+                                   stiffness, friction}`` (NaN where not applicable)
+``/versions``                      attributes: python, numpy, scipy, petsc, slepc, mpi, ...
+``/sizes``, ``/timings``           attributes copied from the result (timings in seconds)
+``/contact``                       attribute ``codes`` (the per-node code legend)
+``/contact/base``                  ``states`` (nx,) S, ``code`` (nx,) i1, ``nodes`` (nx,) i8;
+                                   attribute ``friction``
+``/contact/interfaces/<below>``    ``states``, ``code``, ``lower_nodes``, ``upper_nodes``;
+                                   attributes ``friction``, ``below``
+``/static`` (when solved)          ``r_n``, ``r_t``, ``gap``, ``slip``, ``held`` (base, as the
+                                   static result holds them), ``interfaces/<below>/r_n``...,
+                                   ``u`` (n_dofs,); attributes status, success, message,
+                                   equilibrium_residual, guarantees, notes...
+``/modes``                         ``sigma`` (m,), ``growth_rate`` (m,), ``residual`` (m,),
+                                   ``display_scale`` (m,), ``x`` (m, n_dofs) natural numbering
+``/modes/mode_<k>``                ``support`` (base columns, i8), ``interface_support/<below>``;
+                                   attributes sigma, growth_rate, residual, display_scale
+``/certificates``                  ``mode_residual`` (m,); attributes ``result_residual``,
+                                   ``max_mode_residual``, ``eicp_method``, ``eicp_status``,
+                                   ``eicp_message``, ``eicp_coverage`` (JSON)
+=================================  ==========================================================
+
+Contact state codes (``/contact/*/code`` and the XDMF field ``contact_state``): 0 not a
+contact node, 1 stick, 2 slip+, 3 slip-, 4 separated, 5 grazing, -1 contact node whose state
+is unknown.  For a frictional interface both nodes of a column carry its code.
+
+Nothing half-written is ever left: the result is checked first (mode lengths, states, ...),
+then every file is written into a hidden staging directory inside the output directory and
+moved into place only when all of them are complete; on any error the staging directory is
+removed (and the output directory too, when this call created it).  Rank 0 writes; the
+other ranks of ``comm`` wait for it and return the same paths, or raise the same error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import math
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import MeicpError, ProblemError
+from ..lattice.assembly import as_model
+from .scene import STATES, Scene
+
+FORMAT = "meicp-results"
+FORMAT_VERSION = 1
+#: contact state → code (0 = not a contact node, -1 = unknown state)
+STATE_CODES = {s: k for k, s in enumerate(STATES, start=1)}
+CODE_LEGEND = "0 not a contact node, " + ", ".join(f"{k} {s}" for s, k in STATE_CODES.items()) \
+    + ", -1 unknown"
+#: file names inside the output directory (keys of the returned dict)
+FILES = {"results": "results.h5", "lattice": "lattice.h5", "xdmf": "lattice.xdmf",
+         "mode_png": "mode.png", "contacts_png": "contacts.png"}
+STATIC_FIELDS = ("r_n", "r_t", "gap", "slip")
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _mpi_comm(comm):
+    if comm is None:
+        return None
+    if hasattr(comm, "tompi4py"):
+        comm = comm.tompi4py()
+    return comm if comm.Get_size() > 1 else None
+
+
+def versions() -> dict:
+    """Versions worth recording next to a result (:func:`meicp.info.collect` when PETSc is
+    importable, else the pure-Python part).  Values are strings or numbers."""
+    import platform
+
+    import numpy
+    import scipy
+
+    from .. import __version__
+
+    out = {"meicp": __version__, "python": platform.python_version(), "numpy": numpy.__version__,
+           "scipy": scipy.__version__}
+    try:
+        from ..info import collect
+
+        out.update(collect())
+    except Exception as exc:  # noqa: BLE001 - versions are informative, never fatal
+        out["petsc"] = f"unavailable ({type(exc).__name__}: {exc})"
+    try:
+        import matplotlib
+
+        out["matplotlib"] = matplotlib.__version__
+    except ImportError:  # pragma: no cover
+        pass
+    return {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in out.items()}
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def _fields(obj, skip=()) -> list:
+    """(key, value) of a scene dataclass, in declaration order: scene.py names every field
+    after its TOML key, so new keys are written without changes here."""
+    return [(f.name, getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.name not in skip]
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """A TOML text that :func:`~meicp.io.scene.loads_scene` reads back to an equal scene
+    (``source`` aside): the record of a scene built in code, with no file behind it."""
+    lines = []
+
+    def table(header, items):
+        lines.append("")
+        lines.append(header)
+        for key, value in items:
+            if value is not None:
+                lines.append(f"{key} = {_toml_value(value)}")
+
+    if scene.title:
+        lines.append(f"title = {_toml_value(scene.title)}")
+    table("[lattice]", _fields(scene.lattice))
+    for layer in scene.layers:
+        table("[[layers]]", _fields(layer))
+    for e in scene.embedded:
+        table("[[embedded]]", _fields(e))
+    table("[boundary]", _fields(scene.boundary))
+    for itf in scene.interfaces:
+        if not itf.declared:
+            continue
+        if itf.bonded:
+            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind), ("stiffness", itf.stiffness)])
+        else:
+            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind),
+                                     ("friction", itf.friction), ("states", itf.states)])
+    if scene.contact is not None:
+        table("[contact]", _fields(scene.contact))
+    if scene.load is not None:
+        table("[load]", _fields(scene.load))
+    table("[solver]", _fields(scene.solver))
+    if len(scene.petsc):
+        lines.append("")
+        lines.append("[petsc]")
+        for key, value in scene.petsc.items():
+            lines.append(f"{json.dumps(key)} = {_toml_value(value)}")
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _scene_text(scene: Scene, scene_text):
+    if scene_text:
+        return scene_text
+    if scene.source and os.path.isfile(scene.source):
+        try:
+            text = Path(scene.source).read_text(encoding="utf-8")
+            if text:
+                return text
+        except OSError:
+            pass
+    return scene_to_toml(scene)
+
+
+def _contact_lines(scene: Scene) -> list:
+    """``(key, label, friction, upper nodes, lower nodes or None)`` per contact line: the base
+    first, then the frictional interfaces bottom to top."""
+    model_rows = np.cumsum([0] + [layer.rows for layer in scene.layers])
+    nx = scene.nx
+    out = []
+    if scene.boundary.bottom == "contact":
+        out.append(("base", "rigid base", float(scene.contact.friction), np.arange(nx), None))
+    for itf in scene.frictional_interfaces():
+        r = int(model_rows[itf.index + 1])
+        out.append((itf.below, f"interface above {itf.below!r}", float(itf.friction),
+                    np.arange(r * nx, (r + 1) * nx), np.arange((r - 1) * nx, r * nx)))
+    return out
+
+
+def _check_states(name: str, states, nx: int) -> list:
+    states = list(states or [])
+    if states and len(states) != nx:
+        raise ProblemError(f"{name}: {len(states)} contact states for nx = {nx} columns")
+    for k, s in enumerate(states):
+        if s not in STATE_CODES:
+            raise ProblemError(f"{name}[{k}] = {s!r} is not a contact state "
+                               f"({', '.join(STATE_CODES)})")
+    return states
+
+
+def _columns(name: str, value, nx: int) -> np.ndarray:
+    try:
+        arr = np.asarray(value if value is not None else [], dtype=np.int64).ravel()
+    except (TypeError, ValueError):
+        raise ProblemError(f"{name} must be integer column indices, got {value!r}") from None
+    if arr.size and (arr.min() < 0 or arr.max() >= nx):
+        raise ProblemError(f"{name} has column {int(arr.max() if arr.max() >= nx else arr.min())} "
+                           f"outside 0..{nx - 1}")
+    return arr
+
+
+def _prepare(scene: Scene, result) -> dict:
+    """Check the result against the scene and collect every array to write.  Raises
+    :class:`ProblemError` before anything touches the disk."""
+    if not isinstance(scene, Scene):
+        raise ProblemError(f"write_results needs a Scene, got {type(scene).__name__}")
+    nx, n_dofs = scene.nx, scene.n_dofs
+    lines = _contact_lines(scene)
+    keys = [key for key, *_ in lines]
+    base_states = _check_states("result.states", getattr(result, "states", None), nx)
+    if base_states and "base" not in keys:
+        raise ProblemError(f"result.states lists {len(base_states)} base contact states but the "
+                           f"scene has no rigid base (boundary.bottom = {scene.boundary.bottom!r})")
+    itf_states = dict(getattr(result, "interface_states", None) or {})
+    for name in itf_states:
+        if name not in keys or name == "base":
+            raise ProblemError(f"result.interface_states[{name!r}]: the scene has no frictional "
+                               f"interface above a layer {name!r}")
+    states = {"base": base_states}
+    for name, value in itf_states.items():
+        states[name] = _check_states(f"result.interface_states[{name!r}]", value, nx)
+    modes = []
+    for k, m in enumerate(getattr(result, "modes", None) or []):
+        x = np.asarray(m.x, dtype=float).ravel()
+        if x.size != n_dofs:
+            raise ProblemError(f"mode {k}: x has {x.size} values, the scene has {n_dofs} DOFs")
+        if not np.all(np.isfinite(x)):
+            raise ProblemError(f"mode {k}: x is not finite")
+        sigma = float(m.sigma)
+        if not math.isfinite(sigma):
+            raise ProblemError(f"mode {k}: sigma = {sigma} is not finite")
+        support = _columns(f"mode {k}: support", m.support, nx)
+        if support.size and "base" not in keys:
+            raise ProblemError(f"mode {k}: support lists base contact nodes but the scene has no "
+                               f"rigid base (frictional interfaces go in interface_support)")
+        isup = {}
+        for name, sup in (getattr(m, "interface_support", None) or {}).items():
+            if name not in keys or name == "base":
+                raise ProblemError(f"mode {k}: interface_support[{name!r}]: no frictional "
+                                   f"interface above a layer {name!r}")
+            isup[name] = _columns(f"mode {k}: interface_support[{name!r}]", sup, nx)
+        modes.append({"mode": m, "sigma": sigma, "growth_rate": float(m.growth_rate), "x": x,
+                      "support": support, "interface_support": isup,
+                      "residual": float(getattr(m, "residual", float("nan")))})
+    static = getattr(result, "static", None)
+    forces, iforces, static_u = {}, {}, None
+    if static is not None:
+        for name in STATIC_FIELDS + ("held",):
+            value = getattr(static, name, None)
+            if value is not None:
+                forces[name] = _numeric(f"result.static.{name}", value)
+            for itf, value in (getattr(static, f"interface_{name}", None) or {}).items():
+                if value is not None:
+                    iforces.setdefault(str(itf), {})[name] = _numeric(
+                        f"result.static.interface_{name}[{itf!r}]", value)
+        u = getattr(static, "u", None)
+        if u is not None:
+            static_u = _numeric("result.static.u", u).ravel()
+            if static_u.size != n_dofs:
+                raise ProblemError(f"result.static.u has {static_u.size} values, the scene has "
+                                   f"{n_dofs} DOFs")
+    # per-node contact state code, for the XDMF file
+    code = np.zeros(scene.n_nodes)
+    for key, _, _, upper, lower in lines:
+        st = states.get(key) or []
+        c = np.array([STATE_CODES[s] for s in st], dtype=float) if st else np.full(nx, -1.0)
+        code[upper] = c
+        if lower is not None:
+            code[lower] = c
+    return {"lines": lines, "states": states, "modes": modes, "static": static, "forces": forces,
+            "interface_forces": iforces, "static_u": static_u, "code": code}
+
+
+def _numeric(name: str, value) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ProblemError(f"{name} is not numeric") from None
+    return arr
+
+
+def _line_forces(prep: dict, nx: int) -> dict:
+    """key of each contact line → {r_n, r_t, gap, slip} of length nx, as far as known: the
+    base from ``static.r_n``..., each interface from ``static.interface_r_n[below]``...
+    (arrays of another length are stored in results.h5 but not plotted)."""
+    out = {}
+    for key, *_ in prep["lines"]:
+        src = prep["forces"] if key == "base" else prep["interface_forces"].get(key, {})
+        out[key] = {name: arr for name, arr in src.items()
+                    if name in STATIC_FIELDS and arr.ndim == 1 and arr.size == nx}
+    return out
+
+
+# --------------------------------------------------------------------------- HDF5
+
+def _attr(value):
+    if value is None:
+        return None
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value)
+    if isinstance(value, str):
+        return value.replace("\x00", "").strip()  # MPI's version string ends in NULs
+    return json.dumps(value, default=str)
+
+
+def _set_attrs(obj, items) -> None:
+    for k, v in items.items():
+        v = _attr(v)
+        if v is not None:
+            obj.attrs[str(k)] = v
+
+
+def _strings(values, width: int = 16) -> np.ndarray:
+    return np.array([str(v).encode() for v in values], dtype=f"S{width}")
+
+
+def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, vers: dict,
+              scales: list, ranks: int) -> None:
+    from .. import __version__
+
+    stable = getattr(result, "stable", None)
+    verdict = {True: "stable", False: "unstable"}.get(stable, "undecided")
+    modes = prep["modes"]
+    with h5py.File(path, "w") as f:
+        _set_attrs(f, {
+            "format": FORMAT, "format_version": FORMAT_VERSION, "meicp_version": __version__,
+            "title": scene.title, "source": scene.source or "",
+            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "status": getattr(result, "status", ""), "success": bool(getattr(result, "success", False)),
+            "message": getattr(result, "message", ""), "iterations": getattr(result, "iterations", 0),
+            "residual": getattr(result, "residual", float("nan")), "verdict": verdict,
+            "stable": {True: 1, False: 0}.get(stable, -1), "evidence": getattr(result, "evidence", ""),
+            "n_modes": len(modes), "ranks": ranks})
+        f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
+
+        g = f.create_group("scene_summary")
+        b = scene.boundary
+        _set_attrs(g, {"nx": scene.nx, "ny": scene.ny, "n_nodes": scene.n_nodes,
+                       "n_dofs": scene.n_dofs, "spacing": scene.lattice.spacing,
+                       "shear": scene.lattice.shear, "title": scene.title,
+                       **{f"boundary_{s}": getattr(b, s) for s in ("top", "bottom", "left", "right")},
+                       "base_friction": scene.contact.friction if scene.contact else None,
+                       "n_embedded": len(scene.embedded)})
+        g.create_dataset("layers/name", data=_strings([l.name for l in scene.layers], 64))
+        g.create_dataset("layers/rows", data=np.array([l.rows for l in scene.layers], dtype=np.int64))
+        g.create_dataset("layers/stiffness", data=np.array([l.stiffness for l in scene.layers]))
+        g.create_dataset("layers/density", data=np.array([l.density for l in scene.layers]))
+        if scene.interfaces:
+            nan = float("nan")
+            g.create_dataset("interfaces/below", data=_strings([i.below for i in scene.interfaces], 64))
+            g.create_dataset("interfaces/kind", data=_strings([i.kind for i in scene.interfaces]))
+            g.create_dataset("interfaces/stiffness", data=np.array(
+                [nan if i.stiffness is None else i.stiffness for i in scene.interfaces]))
+            g.create_dataset("interfaces/friction", data=np.array(
+                [nan if i.friction is None else i.friction for i in scene.interfaces]))
+
+        _set_attrs(f.create_group("versions"), vers)
+        _set_attrs(f.create_group("sizes"), dict(getattr(result, "sizes", None) or {}))
+        _set_attrs(f.create_group("timings"), {k: float(v) for k, v in
+                                               (getattr(result, "timings", None) or {}).items()})
+
+        c = f.create_group("contact")
+        c.attrs["codes"] = CODE_LEGEND
+        for key, label, mu, upper, lower in prep["lines"]:
+            st = prep["states"].get(key) or []
+            g = c.create_group("base") if key == "base" else c.create_group(f"interfaces/{key}")
+            _set_attrs(g, {"friction": mu, "label": label, "known": bool(st)})
+            g.create_dataset("states", data=_strings(st if st else ["unknown"] * scene.nx))
+            g.create_dataset("code", data=np.array([STATE_CODES[s] for s in st] if st else
+                                                   [-1] * scene.nx, dtype=np.int8))
+            if lower is None:
+                g.create_dataset("nodes", data=upper.astype(np.int64))
+            else:
+                g.attrs["below"] = key
+                g.create_dataset("lower_nodes", data=lower.astype(np.int64))
+                g.create_dataset("upper_nodes", data=upper.astype(np.int64))
+
+        static = prep["static"]
+        if static is not None:
+            g = f.create_group("static")
+            scalars = ("status", "success", "message", "method", "iterations", "residual",
+                       "equilibrium_residual", "rigid_modes")
+            _set_attrs(g, {name: getattr(static, name, None) for name in scalars
+                           if isinstance(getattr(static, name, None), (str, bool, int, float, np.number))})
+            for name in ("guarantees", "notes"):
+                items = getattr(static, name, None)
+                if isinstance(items, (list, tuple)) and items:
+                    g.attrs[name] = _attr("\n".join(str(x) for x in items))
+            for name, arr in prep["forces"].items():
+                g.create_dataset(name, data=arr)
+            for itf, arrays in prep["interface_forces"].items():
+                for name, arr in arrays.items():
+                    g.create_dataset(f"interfaces/{itf}/{name}", data=arr)
+            if prep["static_u"] is not None:
+                g.create_dataset("u", data=prep["static_u"])
+
+        g = f.create_group("modes")
+        n = scene.n_dofs
+        g.create_dataset("sigma", data=np.array([m["sigma"] for m in modes], dtype=float))
+        g.create_dataset("growth_rate", data=np.array([m["growth_rate"] for m in modes], dtype=float))
+        g.create_dataset("residual", data=np.array([m["residual"] for m in modes], dtype=float))
+        g.create_dataset("display_scale", data=np.array(scales, dtype=float))
+        X = np.stack([m["x"] for m in modes]) if modes else np.zeros((0, n))
+        kw = {"chunks": (1, n), "compression": "gzip", "compression_opts": 4} if modes and n > 4096 else {}
+        g.create_dataset("x", data=X, **kw)
+        for k, m in enumerate(modes):
+            mg = g.create_group(f"mode_{k}")
+            _set_attrs(mg, {"sigma": m["sigma"], "growth_rate": m["growth_rate"],
+                            "residual": m["residual"], "display_scale": scales[k]})
+            mg.create_dataset("support", data=m["support"])
+            for name, sup in m["interface_support"].items():
+                mg.create_dataset(f"interface_support/{name}", data=sup)
+
+        g = f.create_group("certificates")
+        res = np.array([m["residual"] for m in modes], dtype=float)
+        g.create_dataset("mode_residual", data=res)
+        eicp = getattr(result, "eicp", None)
+        solves = [e for e in (eicp if isinstance(eicp, (list, tuple)) else [eicp]) if e is not None]
+
+        def joined(name):  # one value per MEiCP solved (one per grazing case), " | " between
+            values = [getattr(e, name, None) for e in solves]
+            return " | ".join(str(v) for v in values) if any(v is not None for v in values) else None
+
+        coverage = [getattr(e, "coverage", None) for e in solves]
+        _set_attrs(g, {
+            "result_residual": getattr(result, "residual", float("nan")),
+            "max_mode_residual": float(np.nanmax(res)) if res.size and np.isfinite(res).any() else None,
+            "eicp_solves": len(solves), "eicp_method": joined("method"),
+            "eicp_status": joined("status"), "eicp_message": joined("message"),
+            "eicp_coverage": (json.dumps(coverage[0] if len(coverage) == 1 else coverage, default=str)
+                              if any(coverage) else None)})
+
+
+# --------------------------------------------------------------------------- the whole set
+
+def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: dict, ranks: int,
+               max_xdmf_modes: int, plots: bool) -> dict:
+    import h5py
+
+    from ..plotting.lattice import ContactLine, display_scale, plot_contacts, plot_mode
+    from .lattice_output import write_lattice
+
+    model = as_model(scene)
+    modes = prep["modes"]
+    scales = [display_scale(model, m["x"]) for m in modes]
+    written = {}
+
+    _write_h5(h5py, stage / FILES["results"], scene, result, prep, text, vers, scales, ranks)
+    written["results"] = FILES["results"]
+
+    fields = {f"mode_{k}": scales[k] * m["x"] for k, m in enumerate(modes[:max_xdmf_modes])}
+    fields["contact_state"] = prep["code"]
+    if prep["static_u"] is not None:
+        fields["static_u"] = prep["static_u"]
+    files = write_lattice(stage / FILES["lattice"], model, fields=fields, comm=None, scene_text=text)
+    written["lattice"], written["xdmf"] = files.h5.name, files.xdmf.name
+
+    if plots:
+        fastest = modes[0]["mode"] if modes else None
+        plot_mode(model, stage / FILES["mode_png"], fastest, stable=getattr(result, "stable", None),
+                  n_modes=len(modes))
+        written["mode_png"] = FILES["mode_png"]
+        if prep["lines"]:
+            per_line = _line_forces(prep, scene.nx)
+            u = prep["static_u"]
+            u_scale = float(np.abs(u).max()) if u is not None and u.size else None
+            lines = []
+            for key, label, mu, _, _ in prep["lines"]:
+                if fastest is None:
+                    sup = None
+                elif key == "base":
+                    sup = modes[0]["support"]
+                else:
+                    sup = modes[0]["interface_support"].get(key)
+                lines.append(ContactLine(label=label, friction=mu, states=prep["states"].get(key) or None,
+                                         support=sup, scale=u_scale, **per_line[key]))
+            plot_contacts(model, stage / FILES["contacts_png"], lines)
+            written["contacts_png"] = FILES["contacts_png"]
+    return written
+
+
+def write_results(directory, scene, result, *, comm=None, scene_text: str | None = None,
+                  max_xdmf_modes: int = 16, plots: bool = True) -> dict:
+    """Write the outputs of an instability analysis to ``directory`` (created if missing).
+
+    ``scene``: the :class:`Scene` analysed; ``result``: its
+    :class:`~meicp.contact.result.InstabilityResult` (modes as NumPy arrays in natural
+    numbering, the same on every rank).  ``scene_text``: the scene file's text (default: read
+    from ``scene.source``, else regenerated).  ``max_xdmf_modes``: how many modes become
+    XDMF fields (all of them go to ``results.h5``).  ``plots``: write the PNGs.
+
+    Returns ``{"results", "lattice", "xdmf", "mode_png", "contacts_png"}`` → Path (the PNG
+    keys only when written).  Collective on ``comm``: rank 0 writes, every rank returns the
+    same dict or raises the same error.  Raises :class:`ProblemError` for a result that does
+    not fit the scene, before anything is written.
+    """
+    mcomm = _mpi_comm(comm)
+    rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
+    directory = Path(directory)
+    vers = versions()  # on every rank: importing PETSc may be collective
+    outcome = None  # (written names) or (error class name, message)
+    error = None
+    if rank == 0:
+        try:
+            outcome = ("ok", _write_rank0(directory, scene, result, scene_text, vers, size,
+                                          max_xdmf_modes, plots))
+        except BaseException as exc:  # noqa: BLE001 - re-raised below, after telling the others
+            error = exc
+            outcome = ("ProblemError" if isinstance(exc, ProblemError) else "error",
+                       f"{exc}" if isinstance(exc, MeicpError) else f"{type(exc).__name__}: {exc}")
+    if mcomm is not None:
+        outcome = mcomm.bcast(outcome, root=0)
+    if error is not None:
+        raise error
+    kind, payload = outcome
+    if kind == "ProblemError":
+        raise ProblemError(payload)
+    if kind != "ok":
+        raise MeicpError(f"writing the results on rank 0 failed: {payload}")
+    return {key: directory / name for key, name in payload.items()}
+
+
+def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xdmf_modes, plots) -> dict:
+    prep = _prepare(scene, result)  # every check before the disk is touched
+    text = _scene_text(scene, scene_text)
+    created = None  # the topmost directory this call creates, removed again on error
+    for d in [directory, *directory.parents]:
+        if d.exists():
+            break
+        created = d
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ProblemError(f"cannot create output directory {str(directory)!r}: "
+                           f"{exc.strerror or exc}") from None
+    if not os.access(directory, os.W_OK):
+        raise ProblemError(f"output directory {str(directory)!r} is not writable")
+    stage = directory / f".meicp-results.{os.getpid()}.tmp"
+    try:
+        stage.mkdir()
+        written = _write_all(stage, scene, result, prep, text, vers, ranks, max_xdmf_modes, plots)
+        # data first, the XDMF (which points at lattice.h5) after it, results.h5 last
+        order = [k for k in ("lattice", "xdmf", "mode_png", "contacts_png", "results") if k in written]
+        for key in order:
+            os.replace(stage / written[key], directory / written[key])
+        if plots:  # a stale PNG from an earlier run of another scene would mislead
+            for key in ("contacts_png",):
+                if key not in written and (directory / FILES[key]).exists():
+                    (directory / FILES[key]).unlink()
+        return written
+    except BaseException:
+        if created is not None:
+            shutil.rmtree(created, ignore_errors=True)
+        raise
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)

@@ -1,0 +1,166 @@
+"""The instability analysis: maps, oracles, enumeration against active-set, critical friction."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import meicp
+from meicp.contact.instability import analyze, critical_friction
+from meicp.contact.maps import contact_sets, reduced_system
+from meicp.core.errors import ProblemError
+from meicp.io.scene import loads_scene
+from meicp.lattice.assembly import assemble
+from meicp.lattice.model import LatticeModel
+
+from .conftest import ROOT
+
+SCENES = ROOT / "data" / "scenes"
+
+
+def cell_scene(states, shear=0.4, mu=1.0, rows=2):
+    return loads_scene(f"""
+[lattice]
+nx = 2
+shear = {shear}
+[[layers]]
+name = "A"
+rows = {rows}
+stiffness = 1.0
+density = 1.0
+[boundary]
+top = "fixed"
+bottom = "contact"
+[contact]
+friction = {mu}
+states = {states!r}
+""".replace("'", '"'))
+
+
+@pytest.mark.parametrize("shear", [0.4, -0.7, 1.5])
+def test_single_node_oracle(shear):
+    """One slipping node, everything else held: μ_c = k_tt / |k_tn| from K's 2×2 block of
+    that node, for slip against the sign of k_tn; no μ_c for the other direction."""
+    K, _ = assemble(LatticeModel(cell_scene(["stick", "slip+"], shear)))
+    K = K.toarray()
+    k_tt, k_tn = K[2, 2], K[2, 3]  # node 1 = (i=1, j=0): DOFs 2 (x), 3 (y)
+    assert abs(k_tn) > 1e-3
+    good = "slip+" if k_tn < 0 else "slip-"   # s = −sign(k_tn)
+    bad = "slip-" if good == "slip+" else "slip+"
+    assert critical_friction(cell_scene(["stick", good], shear)) == pytest.approx(k_tt / abs(k_tn), rel=1e-10)
+    assert critical_friction(cell_scene(["stick", bad], shear)) == np.inf
+
+
+def test_single_spring_is_cot_theta():
+    """The k_tt/|k_tn| ratio of one bond at angle θ is cot θ: check on the element matrix."""
+    from meicp.lattice.assembly import bond_stiffness
+
+    for theta in (0.3, 0.9, 1.2):
+        K = bond_stiffness([[0, 0], [np.cos(theta), np.sin(theta)]], [[0, 1]], 2.0).toarray()
+        assert K[0, 0] / abs(K[0, 1]) == pytest.approx(1 / np.tan(theta))
+
+
+def test_maps_by_hand_on_the_cell():
+    """A = −PKQ, B = PMQ for states [slip-, separated] built independently in dense form."""
+    scene = cell_scene(["slip-", "separated"], 0.2, mu=0.7)
+    model = LatticeModel(scene)
+    K, M = (m.toarray() for m in assemble(model))
+    red = reduced_system(model, contact_sets(scene, model))
+    # retained: node 0 x (slip-, column −e_0), node 1 x and y (free); top row fixed
+    Q = np.zeros((8, 3))
+    Q[0, 0], Q[2, 1], Q[3, 2] = -1.0, 1.0, 1.0
+    P = np.zeros((3, 8))
+    P[0, 0], P[0, 1] = -1.0, 0.7      # s·e_t + μ·e_n
+    P[1, 2] = P[2, 3] = 1.0
+    assert np.allclose(red.Q.toarray(), Q) and np.allclose(red.P.toarray(), P)
+    assert red.J.tolist() == [0]
+
+
+def test_two_layers_unstable_above_and_stable_below_critical_friction():
+    mu_c = critical_friction(SCENES / "two_layers.toml")
+    assert 1.0 < mu_c < 3.0
+    unstable = analyze(SCENES / "two_layers.toml")
+    assert unstable.stable is False and unstable.modes and unstable.modes[0].sigma > 0
+    assert unstable.modes[0].growth_rate == pytest.approx(np.sqrt(unstable.modes[0].sigma))
+    stable = analyze(SCENES / "two_layers_stable.toml")
+    assert stable.stable is True and "a proof" in stable.evidence
+    assert stable.states == ["slip+"] * 5
+
+
+def test_slip_direction_matters_on_a_sheared_lattice():
+    plus = critical_friction(SCENES / "sheared_slip_plus.toml")
+    minus = critical_friction(SCENES / "sheared_slip_minus.toml")
+    assert abs(plus - minus) > 0.5
+    assert analyze(SCENES / "sheared_slip_minus.toml").stable is False
+    assert analyze(SCENES / "sheared_slip_plus.toml").stable is True
+
+
+def test_modes_are_certified_and_in_natural_numbering():
+    r = analyze(SCENES / "two_layers.toml")
+    model = LatticeModel(meicp.load_scene(SCENES / "two_layers.toml"))
+    for m in r.modes:
+        assert m.x.shape == (model.n_dofs,) and abs(np.linalg.norm(m.x) - 1) < 1e-12
+        assert np.all(m.x[model.constrained_dofs()] == 0)
+        assert m.residual <= 1e-10
+        # slipping nodes: v_n = 0 and v_t ≥ 0 in the slip direction (slip+)
+        bottom = np.arange(model.nx)
+        assert np.all(m.x[2 * bottom + 1] == 0) and np.all(m.x[2 * bottom] >= -1e-12)
+
+
+def test_active_set_mode_is_among_the_enumerated_ones():
+    scene = meicp.load_scene(SCENES / "sheared_slip_minus.toml")
+    every = analyze(scene, method="enumerate")
+    one = analyze(scene, method="active-set")
+    assert one.stable is False
+    assert any(abs(m.sigma - one.modes[0].sigma) <= 1e-9 * m.sigma for m in every.modes)
+
+
+def test_stick_everywhere_is_a_plain_eigenproblem():
+    """All nodes sticking: no complementarity; the modes are the generalized eigenpairs of the
+    lattice with the bottom row fixed, none with σ ≥ 0 (K SPD): stable by enumeration."""
+    r = analyze(cell_scene("stick", rows=4))
+    assert r.stable is True and r.sizes["complementarity"] == 0 and r.sizes["retained"] == 8
+    held = analyze(cell_scene("stick"))  # nothing left to move
+    assert held.stable is True and "every DOF is held" in held.evidence
+
+
+def test_frictional_interface_all_stick_equals_tied_lattice():
+    """Sticking pairs tie u_upper = u_lower: the pencil's eigenvalues equal the limit of the
+    same lattice with stiff penalty springs between the pairs (an independent construction)."""
+    text = (SCENES / "frictional_interface.toml").read_text().replace('states = "slip+"', 'states = "stick"')
+    scene = loads_scene(text)
+    model = LatticeModel(scene)
+    K, M = assemble(model)
+    red = reduced_system(model, contact_sets(scene, model))
+    A, B = -(red.P @ K @ red.Q).toarray(), (red.P @ M @ red.Q).toarray()
+    tied = np.sort(scipy.linalg.eigvals(A, B).real)[::-1][:4]
+    lower, upper = model.interface_node_pairs(0)
+    free = model.free_dofs()
+    Kd, Md = K.toarray(), M.toarray()
+    for kp in (1e6,):
+        Kp = Kd.copy()
+        for a, b in zip(lower, upper):
+            for c in (0, 1):
+                i, j = 2 * a + c, 2 * b + c
+                Kp[i, i] += kp
+                Kp[j, j] += kp
+                Kp[i, j] -= kp
+                Kp[j, i] -= kp
+        pen = np.sort(-scipy.linalg.eigh(Kp[np.ix_(free, free)], Md[np.ix_(free, free)], eigvals_only=True))[::-1][:4]
+        assert np.allclose(pen, tied, rtol=1e-4)
+    # tied pairs merge their masses (diagonal B); sliding pairs keep d, which M couples to
+    # u_lower: B is no longer diagonal
+    sliding = meicp.load_scene(SCENES / "frictional_interface.toml")
+    red = reduced_system(LatticeModel(sliding), contact_sets(sliding, LatticeModel(sliding)))
+    Bs = (red.P @ M @ red.Q).toarray()
+    assert np.count_nonzero(Bs - np.diag(np.diag(Bs))) > 0
+
+
+def test_bad_scenes():
+    with pytest.raises(ProblemError, match="no contact"):
+        analyze(SCENES / "sheared.toml")
+    with pytest.raises(ProblemError, match="one state per column"):
+        analyze(cell_scene(["stick", "slip+", "slip+"]))
+    with pytest.raises(ProblemError, match="slide"):
+        analyze(cell_scene(["stick", "slide"]))

@@ -1,0 +1,28 @@
+"""The instability analysis on 2 ranks gives the same modes as on 1 (DESIGN target 1e-8)."""
+
+import numpy as np
+import pytest
+
+from .conftest import ROOT
+
+pytestmark = pytest.mark.mpi(min_size=2)
+SCENES = ROOT / "data" / "scenes"
+
+
+@pytest.mark.parametrize("name, method", [("two_layers.toml", "enumerate"),
+                                          ("sheared_slip_minus.toml", "active-set"),
+                                          ("two_layers_stable.toml", "auto")])
+def test_same_modes_on_one_and_two_ranks(comm, name, method):
+    from meicp.contact.instability import analyze
+
+    par = analyze(SCENES / name, comm=comm, method=method)
+    ser = analyze(SCENES / name, method=method)
+    assert par.stable == ser.stable
+    assert len(par.modes) == len(ser.modes)
+    for a, b in zip(par.modes, ser.modes):
+        assert abs(a.sigma - b.sigma) <= 1e-8 * abs(b.sigma)
+        assert np.allclose(a.x, b.x, atol=1e-8)
+        assert np.array_equal(a.support, b.support)
+    # every rank holds the same answer
+    sig = comm.allgather([m.sigma for m in par.modes])
+    assert all(s == sig[0] for s in sig)
