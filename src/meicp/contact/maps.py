@@ -125,8 +125,10 @@ def reduced_system(model, sets: list[ContactSet], grazing_case: tuple = ()) -> R
     for s_idx, cs in enumerate(sets):
         for i, (node, state) in enumerate(zip(cs.upper, cs.states)):
             t, nn = 2 * node, 2 * node + 1
-            if not (keep[t] and keep[nn]):
-                raise ProblemError(f"contact node {node} of {cs.name} is also on a fixed boundary")
+            if not keep[t]:  # x held by a fixed side: it cannot slip
+                state = {"slip+": "stick", "slip-": "stick"}.get(state, state)
+            if not (keep[t] or keep[nn]):
+                continue  # held in both directions by the boundary
             tangential = state
             if state == "grazing":
                 tangential = case_of.get((s_idx, i))
@@ -140,6 +142,8 @@ def reduced_system(model, sets: list[ContactSet], grazing_case: tuple = ()) -> R
                 col_sign[t] = 0
                 if state == "stick":
                     col_sign[nn] = 0
+                continue
+            if not keep[nn]:  # y held by the boundary: slip on a held normal is plain free x
                 continue
             # slip in direction s (also the tangential case of a grazing contact)
             sign = 1 if tangential == "slip+" else -1

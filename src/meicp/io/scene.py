@@ -56,6 +56,12 @@ The whole schema, with defaults (``required`` = no default)::
     [load]                        # optional
     top_displacement = [0.06, -0.1]   # prescribed displacement of the top row (needs a
                                       # top boundary that is not "free")
+    side_displacement = [0.05, -0.05] # prescribed x displacement of the left and right
+                                      # columns [left_ux, right_ux] (lateral shortening); a
+                                      # nonzero value needs that side "fixed" or "fixed_x"
+                                      # (default: none, i.e. fixed sides stay at 0);
+                                      # at a corner the top row's, then a fixed bottom
+                                      # row's prescription wins
     gravity = 0.0                 # body force -gravity·ρ·a³ on every node, in y
 
     [solver]
@@ -227,10 +233,13 @@ class Contact:
 
 @dataclass(frozen=True)
 class Load:
-    """``[load]``: prescribed top-row displacement (used by ``states = "solve"``) and gravity."""
+    """``[load]``: prescribed top-row displacement, prescribed x displacement of the left and
+    right columns (``side_displacement``, lateral shortening) and gravity; used by
+    ``states = "solve"`` (the static equilibrium, :mod:`meicp.contact.static`)."""
 
     top_displacement: tuple[float, float] | None = None
     gravity: float = 0.0
+    side_displacement: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -606,9 +615,20 @@ class _SceneParser:
             if boundary.top == "free":
                 self.fail("load.top_displacement", "needs a top boundary that is fixed "
                                                    "(boundary.top is \"free\")")
+        side = t.raw("side_displacement", None)
+        if side is not None:
+            if not isinstance(side, list) or len(side) != 2:
+                self.fail("load.side_displacement", f"must be a list of 2 numbers [left_ux, right_ux], "
+                                                    f"got {_fmt(side)}")
+            side = tuple(self.check_number(f"load.side_displacement[{k}]", v) for k, v in enumerate(side))
+            for k, name in enumerate(("left", "right")):
+                if side[k] != 0.0 and not boundary.fixed_components(name)[0]:
+                    self.fail("load.side_displacement", f"prescribes x = {side[k]:g} on the {name} side, "
+                              f"which needs boundary.{name} = \"fixed\" or \"fixed_x\" "
+                              f"(it is {getattr(boundary, name)!r})")
         gravity = t.number("gravity", 0.0)
         t.done()
-        return Load(top_displacement=top, gravity=gravity)
+        return Load(top_displacement=top, gravity=gravity, side_displacement=side)
 
     def solver(self, data) -> Solver:
         t = _Table(self, data, "solver")
