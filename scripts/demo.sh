@@ -1,21 +1,24 @@
 #!/usr/bin/env bash
-# `make demo`: the main job on a shipped default.  Until the instability pipeline exists
-# it shows the install report with a distributed SLEPc solve checked against SciPy (1 and
-# 2 ranks), then seed 002's diagnostic workflow on its two worked contact examples:
-# classify M (existence / uniqueness guarantees, game value), then solve the LCP.
+# `make demo`: the main job on the shipped default scene, then the diagnostics around it.
+#  1. the install report, with a distributed SLEPc solve checked against SciPy;
+#  2. `mpirun -n 2 meicp solve data/scenes/two_layers.toml`: two layers on a rough base,
+#     all base nodes sliding at μ = 3 — the divergence modes, their certificates, the
+#     critical friction, and results.h5 / lattice.xdmf / PNGs in out/two_layers;
+#  3. the same lattice at μ = 1.5 (below μ_c): stable, with the enumeration's proof;
+#  4. seed 002's workflow on its worked LCP examples: classify M, then solve.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MEICP=.venv/bin/meicp
-echo "== meicp info --check (1 rank)"
-$MEICP info --check
+MPIRUN="timeout 600 mpirun -n 2 --oversubscribe"
+echo "== meicp info --check"
+$MEICP info --check | tail -n 12
 echo
-echo "== mpirun -n 2 meicp info --check"
-timeout 300 mpirun -n 2 --oversubscribe $MEICP info --check | tail -n 1
-for f in data/lcp/seed002_two_point.dat data/lcp/seed002_three_node.dat; do
-    echo
-    echo "== meicp classify $f"
-    $MEICP classify "$f"
-    echo
-    echo "== meicp lcp $f"
-    $MEICP lcp "$f"
-done
+echo "== mpirun -n 2 meicp solve data/scenes/two_layers.toml --critical-friction -o out/two_layers"
+$MPIRUN $MEICP solve data/scenes/two_layers.toml --critical-friction -o out/two_layers
+echo
+echo "== mpirun -n 2 meicp solve data/scenes/two_layers_stable.toml --no-output -q"
+$MPIRUN $MEICP solve data/scenes/two_layers_stable.toml --no-output -q
+echo
+echo "== seed 002: classify, then solve, the three-node contact LCP"
+$MEICP classify data/lcp/seed002_three_node.dat | tail -n 12
+$MEICP lcp data/lcp/seed002_three_node.dat

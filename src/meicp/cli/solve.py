@@ -44,6 +44,8 @@ def register(sub) -> None:
                    help="output directory, created if missing (default: out/<scene stem>)")
     p.add_argument("--no-output", action="store_true", help="print the summary only, write no files")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines, only the summary")
+    p.add_argument("--critical-friction", action="store_true",
+                   help="also compute μ_c, the smallest friction with a divergence mode (small scenes: enumeration)")
     p.set_defaults(run=run)
 
 
@@ -217,6 +219,15 @@ def _run(args, comm, t0, load_scene) -> int:
     log.info(f"analysis: done in {_seconds(wall['analyze'])} ({getattr(result, 'status', '?')})")
 
     rows = summary_rows(scene, result, ranks=comm.Get_size())
+    if args.critical_friction:
+        from ..contact.instability import critical_friction
+
+        log.info("critical friction: μ as the eigenvalue at σ = 0, checked by bisection")
+        t3 = time.perf_counter()
+        mu_c = critical_friction(scene)  # serial and deterministic: every rank computes it alike
+        wall["critical_friction"] = time.perf_counter() - t3
+        rows.append(("μ_c", f"{mu_c:.10g}  (smallest μ with a σ = 0 divergence mode for these states; "
+                             "checked by bisection)" if mu_c < float("inf") else "none up to μ = 1000"))
     if out is not None:
         from ..io.results import write_results
 
