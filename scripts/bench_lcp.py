@@ -34,7 +34,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from meicp.io.problem_files import read_siconos_lcp  # noqa: E402
-from meicp.lcp.problem import LCPProblem, relative_residual  # noqa: E402
 from meicp.lcp.solve import solve_lcp  # noqa: E402
 from meicp.petsc.selfcheck import laplacian_rows  # noqa: E402
 
@@ -122,7 +121,6 @@ def serial_runs(args):
         for solver in theirs:
             wall, r = timed(lambda: siconos_solve(M, q, solver), args.repeat if n < 500 else 1)
             results.append(("siconos-" + solver, wall, r))
-        unique = None
         for method, wall, r in results:
             rows.append(row(family, name, n, method, "tol=1e-10", 1, wall, r, ref))
             print(f"{name:40s} {method:20s} {wall:9.4f}s {r.status:18s} res={r.residual:.2e}", flush=True)

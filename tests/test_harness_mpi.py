@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 pytestmark = pytest.mark.mpi(min_size=2)
 

@@ -1,7 +1,5 @@
 """The instability analysis: maps, oracles, enumeration against active-set, critical friction."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 import scipy.linalg

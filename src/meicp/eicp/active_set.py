@@ -25,7 +25,6 @@ import time
 
 import numpy as np
 
-from ..core.errors import ProblemError
 from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
 
@@ -62,7 +61,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     below it (e.g. 0 for divergence modes); support0: the starting S (default all of J);
     options: PETSc options under ``prefix`` (a scene's ``[petsc]`` table)."""
     t0 = time.perf_counter()
-    J, n = problem.J, problem.n
+    J = problem.J
     if support0 is None:
         S = J.copy()
     else:

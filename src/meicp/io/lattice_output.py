@@ -59,7 +59,8 @@ class LatticeFiles:
     xdmf: Path
 
 
-def _mpi_comm(comm):
+def mpi_comm_or_none(comm):
+    """An mpi4py communicator with several ranks, or None (serial: nothing to gather)."""
     if comm is None:
         return None
     if hasattr(comm, "tompi4py"):
@@ -181,7 +182,7 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
     if parallel_io not in ("auto", "collective", "gather"):
         raise ProblemError(f"parallel_io must be 'auto', 'collective' or 'gather', got {parallel_io!r}")
     model = as_model(scene)
-    mcomm = _mpi_comm(comm)
+    mcomm = mpi_comm_or_none(comm)
     rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
     path = Path(path)
     if path.suffix.lower() not in (".h5", ".hdf5"):

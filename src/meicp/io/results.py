@@ -71,6 +71,7 @@ import numpy as np
 
 from ..core.errors import MeicpError, ProblemError
 from ..lattice.assembly import as_model
+from .lattice_output import mpi_comm_or_none
 from .scene import STATES, Scene
 
 FORMAT = "meicp-results"
@@ -86,14 +87,6 @@ STATIC_FIELDS = ("r_n", "r_t", "gap", "slip")
 
 
 # --------------------------------------------------------------------------- helpers
-
-def _mpi_comm(comm):
-    if comm is None:
-        return None
-    if hasattr(comm, "tompi4py"):
-        comm = comm.tompi4py()
-    return comm if comm.Get_size() > 1 else None
-
 
 def versions() -> dict:
     """Versions worth recording next to a result (:func:`meicp.info.collect` when PETSc is
@@ -532,7 +525,7 @@ def write_results(directory, scene, result, *, comm=None, scene_text: str | None
     same dict or raises the same error.  Raises :class:`ProblemError` for a result that does
     not fit the scene, before anything is written.
     """
-    mcomm = _mpi_comm(comm)
+    mcomm = mpi_comm_or_none(comm)
     rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
     directory = Path(directory)
     vers = versions()  # on every rank: importing PETSc may be collective

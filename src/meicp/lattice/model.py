@@ -110,11 +110,11 @@ class LatticeModel:
     # ------------------------------------------------------------------ sizes, numbering
     @property
     def n_nodes(self) -> int:
-        return self.nx * self.ny
+        return self.scene.n_nodes
 
     @property
     def n_dofs(self) -> int:
-        return 2 * self.n_nodes
+        return self.scene.n_dofs
 
     def row_band(self, rank: int, size: int) -> tuple[int, int]:
         """Rows ``[j0, j1)`` of ``rank`` when ``size`` ranks split the rows contiguously and

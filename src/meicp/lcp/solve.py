@@ -15,11 +15,8 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.validation import is_symmetric
-from .enumeration import MAX_N as ENUMERATE_MAX_N
 from .enumeration import enumerate_lcp
 from .lemke import lemke
 from .pgs import pgs

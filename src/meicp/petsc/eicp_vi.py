@@ -23,14 +23,12 @@ method — converging or not depends on the start; callers must check the certif
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 import scipy.sparse as sp
 
 from . import import_petsc
-from .lcp import _reason_name
-from .options import OptionsScope
+from .options import configure_and_solve
 
 PREFIX = "meicp_eicp_vi_"
 
@@ -141,18 +139,11 @@ def snes_vi_eicp(A, B, J: np.ndarray, x0: np.ndarray, lam0: float, *, atol: floa
                     "snes_rtol": 1e-30, "snes_stol": 0.0, "snes_max_funcs": 100 * max_iter,
                     "snes_linesearch_type": "basic", "ksp_type": "preonly", "pc_type": "lu",
                     "pc_factor_mat_solver_type": "mumps"}
-        t0 = time.perf_counter()
-        with OptionsScope(PREFIX, defaults, options):
-            snes.setOptionsPrefix(PREFIX)
-            snes.setFromOptions()
-            snes.solve(None, z)
-        seconds = time.perf_counter() - t0
-        reason = snes.getConvergedReason()
-        its = snes.getIterationNumber()
+        seconds, reason, its = configure_and_solve(snes, PREFIX, defaults, options, lambda: snes.solve(None, z))
+        converged = snes.getConvergedReason() > 0
         out = z.getArray(readonly=True).copy()
     finally:
         snes.destroy()
         for obj in (Jmat, z, r, lower, upper):
             obj.destroy()
-    return (out[:n], float(out[n]), its, _reason_name(PETSc.SNES.ConvergedReason, reason),
-            reason > 0, seconds)
+    return out[:n], float(out[n]), its, reason, converged, seconds

@@ -15,13 +15,12 @@ SciPy matrix (used on ``COMM_SELF``).  Options live under ``-meicp_lcp_`` (``sne
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
 from . import import_petsc
 from .mat import mat_from_scipy, vec_to_numpy
-from .options import OptionsScope
+from .options import configure_and_solve
 
 PREFIX = "meicp_lcp_"
 
@@ -66,14 +65,7 @@ def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
         defaults = {"snes_type": snes_type, "snes_max_it": max_iter, "snes_atol": 1e-30,
                     "snes_rtol": tol, "snes_stol": 0.0, "ksp_type": "preonly", "pc_type": "lu",
                     "pc_factor_mat_solver_type": "mumps", "snes_linesearch_type": "basic"}
-        t0 = time.perf_counter()
-        with OptionsScope(PREFIX, defaults, options):
-            snes.setOptionsPrefix(PREFIX)
-            snes.setFromOptions()
-            snes.solve(None, x)
-        seconds = time.perf_counter() - t0
-        reason = snes.getConvergedReason()
-        its = snes.getIterationNumber()
+        seconds, reason, its = configure_and_solve(snes, PREFIX, defaults, options, lambda: snes.solve(None, x))
         out = vec_to_numpy(x)
     finally:
         snes.destroy()
@@ -81,7 +73,7 @@ def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
             obj.destroy()
         if owned:
             A.destroy()
-    return out, its, _reason_name(PETSc.SNES.ConvergedReason, reason), seconds
+    return out, its, reason, seconds
 
 
 def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
@@ -114,15 +106,8 @@ def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
         tao.setVariableBounds(lower, upper)
         defaults = {"tao_type": tao_type, "tao_max_it": max_iter, "tao_gatol": 0.0,
                     "tao_grtol": tol, "tao_gttol": 0.0}
-        t0 = time.perf_counter()
-        with OptionsScope(PREFIX, defaults, options):
-            tao.setOptionsPrefix(PREFIX)
-            tao.setFromOptions()
-            tao.setSolution(x)
-            tao.solve()
-        seconds = time.perf_counter() - t0
-        reason = tao.getConvergedReason()
-        its = tao.getIterationNumber()
+        tao.setSolution(x)
+        seconds, reason, its = configure_and_solve(tao, PREFIX, defaults, options, tao.solve)
         out = vec_to_numpy(x)
     finally:
         tao.destroy()
@@ -130,14 +115,7 @@ def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
             obj.destroy()
         if owned:
             A.destroy()
-    return out, its, _reason_name(PETSc.TAO.Reason, reason), seconds
-
-
-def _reason_name(enum, value: int) -> str:
-    for name in dir(enum):
-        if not name.startswith("_") and getattr(enum, name) == value:
-            return f"{name} ({value})"
-    return str(value)
+    return out, its, reason, seconds
 
 
 def check_petsc_matrix(A) -> None:

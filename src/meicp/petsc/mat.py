@@ -41,7 +41,6 @@ def mat_from_local_csr(comm, local_rows: sp.csr_matrix, n_global: int | None = N
 
 def mat_from_scipy(comm, A: sp.spmatrix):
     """Distribute a matrix every rank holds (small problems, tests) by PETSc's default split."""
-    PETSc = import_petsc()
     pcomm = to_petsc_comm(comm)
     A = sp.csr_matrix(A)
     start, end = ownership(A.shape[0], pcomm.getRank(), pcomm.getSize())
@@ -50,8 +49,6 @@ def mat_from_scipy(comm, A: sp.spmatrix):
 
 def mat_to_scipy(A) -> sp.csr_matrix:
     """Gather a PETSc AIJ matrix into a SciPy CSR matrix on every rank.  Collective."""
-    from mpi4py import MPI
-
     indptr, indices, data = A.getValuesCSR()
     start, _ = A.getOwnershipRange()
     local = sp.csr_matrix((data, indices, indptr), shape=(A.getLocalSize()[0], A.getSize()[1]))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import time
 
 from . import import_petsc
 
@@ -89,3 +90,26 @@ def options_used(name: str) -> bool:
     flag = ctypes.c_int(0)
     _USED(None, name.lstrip("-").encode(), ctypes.byref(flag))
     return bool(flag.value)
+
+
+def configure_and_solve(solver, prefix: str, defaults: dict, options: dict | None, solve) -> tuple:
+    """Give a SNES or TAO its options (code defaults < ``options`` < command line) under
+    ``prefix``, call ``solve()`` and return ``(seconds, reason_name, iterations)``."""
+    t0 = time.perf_counter()
+    with OptionsScope(prefix, defaults, options):
+        solver.setOptionsPrefix(prefix)
+        solver.setFromOptions()
+        solve()
+    seconds = time.perf_counter() - t0
+    return seconds, reason_name(solver), solver.getIterationNumber()
+
+
+def reason_name(solver) -> str:
+    """``NAME (code)`` of a SNES or TAO converged reason."""
+    PETSc = import_petsc()
+    enum = PETSc.SNES.ConvergedReason if isinstance(solver, PETSc.SNES) else PETSc.TAO.Reason
+    value = solver.getConvergedReason()
+    for name in dir(enum):
+        if not name.startswith("_") and getattr(enum, name) == value:
+            return f"{name} ({value})"
+    return str(value)

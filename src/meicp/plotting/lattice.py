@@ -233,7 +233,7 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
     path = Path(path)
     if not path.parent.is_dir():
         raise ProblemError(f"output directory {str(path.parent)!r} does not exist")
-    a, nx, ny = model.spacing, model.nx, model.ny
+    a, nx = model.spacing, model.nx
     colours = [f"C{k % 10}" for k in range(len(model.materials))]
     ref = model.positions()
     disp = np.zeros_like(ref)
