@@ -5,7 +5,10 @@ Families:
 - ``siconos``: the Siconos test set in ``../shared/data/siconos-lcp`` (dense, n ≤ 40);
 - ``condensed``: dense SPD contact-like LCPs — a 2-D grid Laplacian condensed (Schur
   complement) onto its bottom row, the contact DOFs; q pushes half the contacts in;
-- ``laplacian``: sparse SPD 2-D Laplacian + 0.05 I with random q, n = 10² … 10⁵.
+- ``laplacian``: sparse SPD 2-D Laplacian + 0.05 I with random q, n = 10² … 10⁵;
+- ``lattice``: the elastic two-layer lattice's stiffness (``meicp.assemble``, top row held)
+  restricted to the vertical DOFs of every other node — every node a potential contact —
+  sparse SPD, with random q, n = 10² … 10⁵.
 
 Each (problem, method) runs ``--repeat`` times; the CSV row holds the median wall time.
 Under ``mpirun -n 2`` only the distributed PETSc methods run (newton, tao) on the
@@ -45,6 +48,35 @@ def laplacian(m: int):
     n = m * m
     M = (laplacian_rows(m, m, 0, n) + 0.05 * sp.eye(n)).tocsr()
     q = np.random.default_rng(m).standard_normal(n)
+    return M, q
+
+
+def lattice(nx: int):
+    """The two-layer lattice K restricted to the y DOFs of its free nodes (sparse SPD)."""
+    from meicp.io.scene import loads_scene
+    from meicp.lattice.assembly import assemble
+
+    ny = max(2, nx // 2)
+    scene = loads_scene(f"""
+[lattice]
+nx = {nx}
+[[layers]]
+name = "A"
+rows = {ny - ny // 2}
+stiffness = 1.0
+density = 1.0
+[[layers]]
+name = "B"
+rows = {ny // 2}
+stiffness = 5.0
+density = 2.0
+[boundary]
+top = "fixed"
+""", source="bench")
+    K, _ = assemble(scene)
+    y = 2 * np.arange(nx * (ny - 1)) + 1  # y DOFs below the held top row
+    M = K[y][:, y].tocsr()
+    q = np.random.default_rng(nx).standard_normal(y.size)
     return M, q
 
 
@@ -98,6 +130,10 @@ def serial_runs(args):
         for m in args.laplacian_sides:
             M, q = laplacian(m)
             problems.append(("laplacian", f"laplacian_{m * m}", M, q))
+    if "lattice" in args.families:
+        for nx in args.lattice_sides:
+            M, q = lattice(nx)
+            problems.append(("lattice", f"lattice_{len(q)}", M, q))
     for family, name, M, q in problems:
         n = len(q)
         dense_ok = n <= args.dense_limit
@@ -154,14 +190,17 @@ def main():
     p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks" / "lcp.csv"))
     p.add_argument("--append", action="store_true")
     p.add_argument("--repeat", type=int, default=3)
-    p.add_argument("--families", nargs="+", default=["siconos", "condensed", "laplacian"])
+    p.add_argument("--families", nargs="+", default=["siconos", "condensed", "laplacian", "lattice"])
     p.add_argument("--condensed-sizes", nargs="+", type=int, default=[10, 30, 100, 300, 1000])
     p.add_argument("--laplacian-sides", nargs="+", type=int, default=[4, 10, 32, 100, 316])
+    p.add_argument("--lattice-sides", nargs="+", type=int, default=[15, 45, 142, 448],
+                   help="nx of the lattice family (n ≈ nx²/2 unknowns)")
     p.add_argument("--dense-limit", type=int, default=1000, help="largest n for dense methods and Siconos")
     p.add_argument("--quick", action="store_true", help="small sizes only, one repeat")
     args = p.parse_args()
     if args.quick:
         args.repeat, args.condensed_sizes, args.laplacian_sides = 1, [10, 100], [4, 10, 32]
+        args.lattice_sides = [15, 45]
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD

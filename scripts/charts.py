@@ -26,8 +26,8 @@ def chart_lcp(path):
     rows = read(path)
     out = Path(path).with_suffix("")
     # 1. time against n for the two scalable families, 1 and 2 ranks
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
-    for ax, family in zip(axes, ("condensed", "laplacian")):
+    fig, axes = plt.subplots(1, 3, figsize=(19, 5))
+    for ax, family in zip(axes, ("condensed", "laplacian", "lattice")):
         series = defaultdict(list)
         for r in rows:
             if r["family"] == family and r["status"] == "solved":
@@ -41,7 +41,8 @@ def chart_lcp(path):
         ax.set_xlabel("n (LCP size)")
         ax.set_ylabel("wall time, median [s]")
         ax.set_title({"condensed": "dense contact-like (condensed grid), SPD",
-                      "laplacian": "sparse SPD (2-D Laplacian + 0.05 I)"}[family])
+                      "laplacian": "sparse SPD (2-D Laplacian + 0.05 I)",
+                      "lattice": "elastic lattice K on vertical DOFs, sparse SPD"}[family])
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()

@@ -89,7 +89,8 @@ def analyze(scene, comm=None, *, method: str | None = None, scene_path=None, **s
     result.interface_states = {cs.name: list(cs.states) for cs in sets if cs.name != "base"}
     # -- lattice --------------------------------------------------------------------------
     t0 = time.perf_counter()
-    K, M = assemble(model)  # SciPy: the maps are applied here; distributed below if asked
+    distributed = _size(comm) > 1
+    K, M = assemble(model, comm if distributed else None)  # PETSc (row bands) or SciPy
     timings["assemble"] = time.perf_counter() - t0
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
     # -- one MEiCP per grazing case -------------------------------------------------------
@@ -99,8 +100,10 @@ def analyze(scene, comm=None, *, method: str | None = None, scene_path=None, **s
     for case in grazing_cases(sets):
         t0 = time.perf_counter()
         red = reduced_system(model, sets, case)
-        A = -(red.P @ K @ red.Q).tocsr()
-        B = (red.P @ M @ red.Q).tocsr()
+        if red.retained.size and distributed:
+            A, B = _distributed_pencil(K, M, red, comm)
+        elif red.retained.size:
+            A, B = -(red.P @ K @ red.Q).tocsr(), (red.P @ M @ red.Q).tocsr()
         timings["reduce"] = timings.get("reduce", 0.0) + time.perf_counter() - t0
         result.sizes = {"dofs": model.n_dofs, "retained": int(red.retained.size), "complementarity": int(red.J.size)}
         log.info("MEiCP: %d retained DOFs, %d complementarity pairs%s", red.retained.size, red.J.size,
@@ -111,13 +114,21 @@ def analyze(scene, comm=None, *, method: str | None = None, scene_path=None, **s
             eicps.append(None)
             continue
         t0 = time.perf_counter()
-        modes_c, evidence, stable, eicp = _solve_meicp(A, B, red, model, sets, scene, comm, method,
-                                                       solver_options)
+        try:
+            modes_c, evidence, stable, eicp = _solve_meicp(A, B, red, model, sets, scene, comm, method,
+                                                           solver_options)
+        finally:
+            if distributed:
+                A.destroy()
+                B.destroy()
         timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
         modes += modes_c
         evidences.append(evidence)
         stable_flags.append(stable)
         eicps.append(eicp)
+    if distributed:
+        K.destroy()
+        M.destroy()
     modes.sort(key=lambda m: -m.sigma)
     result.modes = modes
     result.eicp = eicps[0] if len(eicps) == 1 else eicps
@@ -145,7 +156,7 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
     solver = scene.solver
     lam_min = 0.0 if solver.lam_min is None else solver.lam_min
     tol = solver.tol or 1e-10
-    r = A.shape[0]
+    r = A.getSize()[0] if hasattr(A, "getSize") else A.shape[0]
     small = r <= ENUMERATE_N and red.J.size <= ENUMERATE_J and 2.0 ** red.J.size * r ** 3 <= ENUMERATE_FLOPS
     chosen = method if method not in (None, "auto") else ("enumerate" if small else "active-set")
     kwargs = dict(options)
@@ -155,16 +166,8 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
         kwargs.setdefault("options", dict(scene.petsc))
         if solver.max_iterations:
             kwargs.setdefault("max_iter", solver.max_iterations)
-    if chosen == "active-set" and _size(comm) > 1:
-        Ap, Bp = _distribute(A, B, red, comm)
-        try:
-            eicp = solve_eicp(Ap, Bp, J=red.J, method="active-set", lam_min=lam_min, tol=tol, **kwargs)
-        finally:
-            Ap.destroy()
-            Bp.destroy()
-    else:
-        eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=lam_min, tol=tol,
-                          comm=comm if chosen == "enumerate" and _size(comm) > 1 else None, **kwargs)
+    eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=lam_min, tol=tol,
+                      comm=comm if _size(comm) > 1 else None, **kwargs)
     modes = [_mode(sol, red, sets) for sol in eicp.solutions if sol.lam >= lam_min - tol]
     if chosen == "enumerate":
         cover = eicp.coverage.get("supports", 0)
@@ -173,41 +176,59 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
         return [], f"enumeration of all {cover} supports: no solution with σ ≥ {lam_min} (a proof)", True, eicp
     if modes:
         return modes, f"active-set search: a certified divergence mode after {eicp.coverage.get('eigen_solves')} eigen-solves", False, eicp
-    # no mode found: a proof only through the Rayleigh bound for a symmetric pencil
-    bound = _rayleigh_bound(A, B)
-    if bound is not None and bound < lam_min:
-        return [], (f"symmetric pencil with largest eigenvalue {bound:.6g} < {lam_min}: every MEiCP "
-                    f"solution has σ ≤ that bound (Rayleigh quotient), so none has σ ≥ {lam_min} (a proof)"), True, eicp
+    # no mode found: a proof only for a symmetric pencil, through the Rayleigh bound
+    if _eigenvalues_at_or_above(A, B, lam_min) == 0:
+        return [], (f"symmetric pencil with no eigenvalue ≥ {lam_min} (inertia of A − {lam_min}·B by an "
+                    f"LDLᵀ factorisation): every MEiCP solution is a Rayleigh quotient of the pencil, so "
+                    f"none has σ ≥ {lam_min} (a proof)"), True, eicp
     return [], (f"active-set search found no mode with σ ≥ {lam_min} ({eicp.status}); this is not a proof of "
                 "stability"), None, eicp
 
 
-def _rayleigh_bound(A, B):
-    """λ_max of a symmetric pencil (B SPD), or None when the pencil is not symmetric."""
+def _eigenvalues_at_or_above(A, B, lam_min: float):
+    """How many eigenvalues of the pencil are ≥ lam_min, when it is symmetric with B SPD
+    (Sylvester's inertia of A − lam_min·B, MUMPS LDLᵀ); None for a nonsymmetric pencil."""
     from ..core.validation import is_symmetric
+    from ..petsc.inertia import inertia
+    from ..petsc.mat import mat_from_scipy
 
-    if not (is_symmetric(A, 1e-12) and is_symmetric(B, 1e-12)):
-        return None
-    if A.shape[0] <= 2000:
-        import scipy.linalg
-
-        return float(scipy.linalg.eigh(A.toarray(), B.toarray(), eigvals_only=True)[-1])
-    import scipy.sparse.linalg as spla
-
+    if hasattr(A, "getSize"):
+        a = max(abs(A.norm()), 1e-300)
+        if not (A.isSymmetric(1e-12 * a) and B.isSymmetric(1e-12 * a)):
+            return None
+        C = A.duplicate(copy=True)
+        C.axpy(-lam_min, B)
+    else:
+        if not (is_symmetric(A, 1e-12) and is_symmetric(B, 1e-12)):
+            return None
+        C = mat_from_scipy(None, (A - lam_min * B).tocsr())
     try:
-        return float(spla.eigsh(A, k=1, M=B, which="LA", return_eigenvectors=False, maxiter=5000)[0])
-    except spla.ArpackNoConvergence:
-        return None
+        _, zero, positive = inertia(C)
+    finally:
+        C.destroy()
+    return zero + positive
 
 
-def _distribute(A, B, red, comm):
-    """A, B as PETSc Mats on comm, rows split like the lattice's node bands (reduced DOFs
-    follow their natural DOF numbers)."""
-    from ..petsc.mat import mat_from_local_csr, ownership
+def _distributed_pencil(K, M, red, comm):
+    """``A = −P̃KQ̃``, ``B = P̃MQ̃`` as PETSc matrices: Q̃ with K's row bands, the reduced
+    DOFs owned by the rank of their node, two sparse products per matrix.  Collective."""
+    from ..petsc.mat import mat_from_rows
 
-    rank, size = comm.Get_rank(), comm.Get_size()
-    lo, hi = ownership(A.shape[0], rank, size)
-    return mat_from_local_csr(comm, A[lo:hi], A.shape[0]), mat_from_local_csr(comm, B[lo:hi], B.shape[0])
+    lo, hi = K.getOwnershipRange()
+    r_lo, r_hi = np.searchsorted(red.retained, [lo, hi])
+    n, r = K.getSize()[0], red.retained.size
+    Q = mat_from_rows(comm, red.Q[lo:hi], (n, r), int(r_hi - r_lo))
+    P = mat_from_rows(comm, red.P[r_lo:r_hi], (r, n), hi - lo)
+    try:
+        KQ, MQ = K.matMult(Q), M.matMult(Q)
+        A, B = P.matMult(KQ), P.matMult(MQ)
+        A.scale(-1.0)
+        KQ.destroy()
+        MQ.destroy()
+    finally:
+        Q.destroy()
+        P.destroy()
+    return A, B
 
 
 def _mode(sol, red, sets) -> Mode:

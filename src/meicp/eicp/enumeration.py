@@ -210,6 +210,9 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
         raise ProblemError(f"enumerate visits 2^|J| supports: |J| = {J.size} > max_j = {max_j}")
     if problem.n - J.size > 2000:
         raise ProblemError(f"enumerate solves dense pencils of size |F| + |S|: |F| = {problem.n - J.size} is too large")
+    if problem.distributed:
+        # gathered once (collective); from here on every rank works on its own supports
+        problem = EiCPProblem.from_data(*problem.dense(), J=problem.J)
     rank, size = (0, 1) if comm is None else (comm.Get_rank(), comm.Get_size())
     t0 = time.perf_counter()
     e = _Enumerator(problem, tol, lam_min, lam_max)

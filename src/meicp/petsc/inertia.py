@@ -1,0 +1,33 @@
+"""Inertia of a symmetric matrix by a MUMPS LDLᵀ factorisation (Sylvester's law).
+
+For a symmetric pencil (A, B) with B SPD, the number of eigenvalues λ > τ equals the
+number of positive eigenvalues of ``A − τB``: a factorisation *proves* that no
+eigenvalue reaches τ, which an eigensolver that only looks near a target cannot.
+Collective on the matrix's communicator.
+"""
+
+from __future__ import annotations
+
+from . import import_petsc
+from .options import OptionsScope
+
+PREFIX = "meicp_inertia_"
+
+
+def inertia(A) -> tuple[int, int, int]:
+    """``(negative, zero, positive)`` eigenvalue counts of the symmetric PETSc matrix A."""
+    PETSc = import_petsc()
+    ksp = PETSc.KSP().create(comm=A.getComm())
+    try:
+        ksp.setOperators(A)
+        # ICNTL(13) = 1: MUMPS keeps the root on one process so that the inertia is exact
+        defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
+                    "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_13": 1}
+        with OptionsScope(PREFIX, defaults):
+            ksp.setOptionsPrefix(PREFIX)
+            ksp.setFromOptions()
+            ksp.setUp()
+        nneg, nzero, npos = ksp.getPC().getFactorMatrix().getInertia()
+        return int(nneg), int(nzero), int(npos)
+    finally:
+        ksp.destroy()
