@@ -147,7 +147,8 @@ def serial_runs(args):
             if method == "pgs" and (family == "siconos"):
                 continue  # PGS needs symmetric positive-diagonal M, which most of the set is not
             try:
-                wall, r = timed(lambda: solve_lcp(M, q, method=method), args.repeat)
+                kw = {"max_iter": args.pgs_sweeps} if method == "pgs" else {}
+                wall, r = timed(lambda: solve_lcp(M, q, method=method, **kw), args.repeat)
             except Exception as exc:  # noqa: BLE001 - a benchmark records failures
                 print(f"{name} {method}: {type(exc).__name__}: {exc}", file=sys.stderr)
                 continue
@@ -196,6 +197,7 @@ def main():
     p.add_argument("--lattice-sides", nargs="+", type=int, default=[15, 45, 142, 448],
                    help="nx of the lattice family (n ≈ nx²/2 unknowns)")
     p.add_argument("--dense-limit", type=int, default=1000, help="largest n for dense methods and Siconos")
+    p.add_argument("--pgs-sweeps", type=int, default=5000, help="PGS sweep limit (it fails beyond)")
     p.add_argument("--quick", action="store_true", help="small sizes only, one repeat")
     args = p.parse_args()
     if args.quick:
