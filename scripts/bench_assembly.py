@@ -19,7 +19,6 @@ starts of K and M) and status (``ok`` when nnz equals 4·nodes + 8·bonds).
 from __future__ import annotations
 
 import argparse
-import csv
 import gc
 import math
 import os
@@ -34,7 +33,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "scripts"))
 
+import bench_csv  # noqa: E402
 from meicp.io.scene import scene_from_dict  # noqa: E402
 from meicp.lattice.assembly import assemble  # noqa: E402
 
@@ -196,16 +197,8 @@ def main(argv=None) -> int:
                       f"peak {mine[-1]['rss_peak_mb']} MB over {mine[-1]['matrix_mb']} MB of matrices "
                       f"(max rank ratio {mine[-1]['rank_ratio']}), {mine[-1]['status']}", flush=True)
     if rank == 0:
-        args.csv.parent.mkdir(parents=True, exist_ok=True)
-        kept = []
-        if args.csv.exists():
-            with open(args.csv, newline="") as f:
-                kept = [r for r in csv.DictReader(f)
-                        if not (int(r["ranks"]) == size and r["method"] in methods)]
-        with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=FIELDS)
-            w.writeheader()
-            w.writerows(kept + rows)
+        bench_csv.write_rows(args.csv, rows, FIELDS,
+                             keep=lambda r: not (int(r["ranks"]) == size and r["method"] in methods))
         print(f"wrote {args.csv}")
     return 0
 

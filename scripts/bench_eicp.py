@@ -20,8 +20,6 @@ Krylov–Schur solve (MUMPS) of the full pencil with the same options, from scra
 from __future__ import annotations
 
 import argparse
-import csv
-import os
 import resource
 import statistics
 import sys
@@ -32,6 +30,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+import bench_csv  # noqa: E402
 OUT = ROOT / "docs" / "benchmarks" / "eicp.csv"
 FIELDS = ["experiment", "problem", "n", "J", "method", "settings", "ranks", "wall_s", "iterations",
           "status", "solutions", "residual", "error", "peak_rss_mb"]
@@ -47,17 +48,7 @@ def peak_mb(comm) -> float:
 def write_rows(rows, comm):
     if comm.rank != 0 or not rows:
         return
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    existing = []
-    if OUT.exists():
-        with OUT.open() as f:
-            existing = list(csv.DictReader(f))
-    tmp = OUT.with_name(OUT.name + ".part")
-    with tmp.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        w.writeheader()
-        w.writerows(existing + rows)
-    os.replace(tmp, OUT)
+    bench_csv.write_rows(OUT, rows, FIELDS)
     print(f"appended {len(rows)} rows to {OUT}")
 
 

@@ -22,8 +22,6 @@ Under ``mpirun -n 2`` only the distributed PETSc methods run (newton, tao) on th
 from __future__ import annotations
 
 import argparse
-import csv
-import os
 import statistics
 import sys
 import time
@@ -35,6 +33,9 @@ import scipy.sparse.linalg as spla
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+import bench_csv  # noqa: E402
 
 from meicp.io.problem_files import read_siconos_lcp  # noqa: E402
 from meicp.lcp.solve import solve_lcp  # noqa: E402
@@ -208,19 +209,8 @@ def main():
     comm = MPI.COMM_WORLD
     rows = serial_runs(args) if comm.size == 1 else distributed_runs(args, comm)
     if comm.rank == 0:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        existing = []
-        if args.append and out.exists():
-            with out.open() as f:
-                existing = list(csv.DictReader(f))
-        tmp = out.with_name(out.name + ".part")
-        with tmp.open("w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=FIELDS)
-            w.writeheader()
-            w.writerows(existing + rows)
-        os.replace(tmp, out)
-        print(f"wrote {len(rows)} rows to {out}")
+        bench_csv.write_rows(args.out, rows, FIELDS, keep=lambda r: args.append)
+        print(f"wrote {len(rows)} rows to {args.out}")
 
 
 if __name__ == "__main__":

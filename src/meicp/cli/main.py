@@ -27,7 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="meicp",
         description="Stability of layered elastic lattices in frictional contact (MEiCP/LCP on PETSc/SLEPc).",
-        epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -eps_view")
+        epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -meicp_as_eps_view")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     # each subcommand lives in its own module with register(subparsers)

@@ -133,14 +133,7 @@ def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 6000
                  + (f", shear {model.shear:g}" if model.shear else ""))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.png")
-    try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    return _save(fig, path, dpi)
 
 
 # --------------------------------------------------------------------------- mode shapes
