@@ -360,5 +360,98 @@ def test_failed_lcp_reports_no_states():
 
 def test_too_many_contacts_is_honest():
     s = scene(1001, mu=0.5, load={"top_displacement": [0.0, -0.1]}, interfaces=frictional(0.4))
-    with pytest.raises(ProblemError, match="sparse mixed formulation is not implemented"):
-        static_equilibrium(s)
+    with pytest.raises(ProblemError, match="condensed dense formulation's limit.*mixed"):
+        static_equilibrium(s, formulation="condensed")
+
+
+# ------------------------------------------------------------------------ mixed formulation
+
+MIXED_SCENES = {
+    "compression_large_mu_stick": lambda: scene(7, mu=1.0, load={"top_displacement": [0.0, -0.1]}),
+    "shear_small_mu_slip": lambda: scene(7, mu=0.05, load={"top_displacement": [0.05, -0.1]}),
+    "uplift_separated": lambda: scene(5, mu=0.5, load={"top_displacement": [0.0, 0.1]}),
+    "frictional_interface": lambda: scene(5, bottom="fixed", load={"top_displacement": [0.1, -0.1]},
+                                          interfaces=frictional(0.4)),
+    "frictionless": lambda: scene(7, mu=0.0, load={"top_displacement": [0.0, -0.1]}),
+    "base_and_interface_floating": lambda: scene(5, mu=0.5, load={"top_displacement": [0.02, -0.1]},
+                                                 interfaces=frictional(0.4)),
+    "gravity_free_top": lambda: scene(5, top="free", mu=0.5, load={"gravity": 2.0}),
+    "side_shortening": lambda: scene(7, top="free", left="fixed_x", right="fixed_x", mu=0.1,
+                                     load={"side_displacement": [0.05, -0.05], "gravity": 0.2}),
+    "medium_shear_slip": lambda: scene(100, mu=0.3, load={"top_displacement": [0.05, -0.05]}),
+    "medium_stick": lambda: scene(100, mu=2.0, load={"top_displacement": [0.01, -0.05]}),
+    "medium_interface": lambda: scene(50, bottom="fixed", load={"top_displacement": [0.05, -0.1]},
+                                      interfaces=frictional(0.2)),
+}
+
+
+def assert_same_equilibrium(a: StaticResult, b: StaticResult, rtol=1e-7):
+    assert a.states == b.states and a.interface_states == b.interface_states
+    pairs = [(a.r_n, b.r_n), (a.r_t, b.r_t)] if a.r_n is not None else []
+    for k in a.interface_r_n:
+        pairs += [(a.interface_r_n[k], b.interface_r_n[k]), (a.interface_r_t[k], b.interface_r_t[k])]
+    scale = max([np.abs(x).max() for x, _ in pairs] + [1e-300])
+    for x, y in pairs:
+        assert np.abs(x - y).max() <= rtol * scale
+    assert np.abs(a.u - b.u).max() <= rtol * max(np.abs(a.u).max(), 1e-300)
+
+
+@pytest.mark.parametrize("name", sorted(MIXED_SCENES))
+def test_mixed_formulation_matches_condensed(name):
+    s = MIXED_SCENES[name]()
+    c = static_equilibrium(s, formulation="condensed")
+    m = static_equilibrium(s, formulation="mixed")
+    assert c.success and m.success, m.message
+    assert_same_equilibrium(c, m)
+    # independent checks of the mixed result: equilibrium from a fresh assembly, the laws
+    if name == "uplift_separated":   # no force at all: K u vanishes on the free DOFs
+        res, model = residual_forces(s, m)
+        assert np.abs(res[model.free_dofs()]).max() <= 1e-12 * np.abs(m.u).max()
+    else:
+        check_equilibrium(s, m)
+    for rn, rt, g, u, mu, st in [(m.r_n, m.r_t, m.gap, m.slip, s.contact.friction if s.contact else 0, m.states)] * (
+            m.r_n is not None) + [(m.interface_r_n[k], m.interface_r_t[k], m.interface_gap[k],
+                                   m.interface_slip[k], 0.4 if name == "frictional_interface" else None,
+                                   m.interface_states[k]) for k in m.interface_r_n]:
+        if mu is None:
+            continue
+        F, D = check_laws(m, mu, rn, rt, g, u)
+        states_consistent(st, mu, rn, rt, u, F, D)
+    assert m.equilibrium_residual <= 1e-9
+    assert m.residual <= 1e-9
+    # the mixed path does not classify, and says why
+    assert m.classes is None and m.lcp_matrix is None
+    assert any("not classified" in n and "not the contact operator" in n for n in m.notes)
+    assert m.layout["formulation"] == "mixed"
+
+
+def test_mixed_formulation_semismooth_variant_is_certified():
+    s = MIXED_SCENES["medium_shear_slip"]()
+    c = static_equilibrium(s, formulation="condensed")
+    m = static_equilibrium(s, formulation="mixed", petsc_options={"snes_type": "vinewtonssls"})
+    assert m.success and m.layout["attempts"][0]["snes_type"] == "vinewtonssls"
+    assert_same_equilibrium(c, m)
+
+
+def test_mixed_formulation_failure_reports_no_states():
+    # gravity pointing up on a free block: no equilibrium exists
+    r = static_equilibrium(scene(4, top="free", mu=0.5, load={"gravity": -1.0}), formulation="mixed")
+    assert not r.success and r.states == [] and r.u is None
+    assert "SNES VI" in r.message and "vinewtonrsls" in r.message and "no contact states" in r.message
+
+
+def test_formulation_auto_and_bad_value():
+    small = static_equilibrium(scene(5, mu=0.5, load={"top_displacement": [0.0, -0.1]}))
+    assert small.lcp_matrix is not None and small.classes is not None       # condensed
+    large = static_equilibrium(scene(201, mu=0.5, load={"top_displacement": [0.0, -0.1]}))
+    assert large.success and large.layout["formulation"] == "mixed"
+    with pytest.raises(ProblemError, match="formulation"):
+        static_equilibrium(scene(5, load={"top_displacement": [0.0, -0.1]}), formulation="sparse")
+
+
+def test_mixed_formulation_above_the_condensed_limit():
+    s = scene(1001, mu=0.5, load={"top_displacement": [0.02, -0.1]}, interfaces=frictional(0.4))
+    r = static_equilibrium(s)   # auto → mixed: 2002 contacts
+    assert r.success, r.message
+    assert len(r.states) == 1001 and len(r.interface_states["A"]) == 1001
+    check_equilibrium(s, r)

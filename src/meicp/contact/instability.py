@@ -76,7 +76,7 @@ def analyze(scene, comm=None, *, method: str | None = None, scene_path=None, **s
 
         t0 = time.perf_counter()
         log.info("static equilibrium: frictional contact LCP")
-        static = static_equilibrium(scene, model=model)
+        static = static_equilibrium(scene, model=model, comm=comm if _size(comm) > 1 else None)
         timings["static"] = time.perf_counter() - t0
         result.static = static
         if not static.success:

@@ -125,8 +125,36 @@ Classification tolerances (``tol``, default :data:`TOL`; ``F``, ``D`` below)
 A failed LCP (no certified solution) gives ``status`` from the LCP and no states: states
 are never invented.
 
-Size limit: at most :data:`MAX_CONTACTS` contacts (dense G, dense pivoting); above it a
-:class:`ProblemError` says so — the sparse mixed formulation is not implemented yet.
+Size limit of the condensed formulation: at most :data:`MAX_CONTACTS` contacts (dense G,
+dense pivoting); above it a :class:`ProblemError` says so.
+
+Mixed formulation (sparse, PETSc)
+---------------------------------
+``formulation="mixed"`` (the default above :data:`AUTO_CONDENSED_LIMIT` contacts) keeps the
+displacements: ``z = (u_f, r_n, β⁺, β⁻, λ)``, u_f unbounded, the rest ≥ 0, and::
+
+    K_ff u_f − C_nᵀ r_n − C_tᵀ(β⁺ − β⁻) − b0 = 0
+    gap(u)  = C_n u_f + A_np u_p         ≥ 0 ⊥ r_n
+    λ + slip(u) = λ + C_t u_f + A_tp u_p ≥ 0 ⊥ β⁺
+    λ − slip(u)                          ≥ 0 ⊥ β⁻
+    μ r_n − β⁺ − β⁻                      ≥ 0 ⊥ λ
+
+with ``C_n = A_nf[normal set]``, ``C_t = A_tf[friction set]`` (the same maps, sets and sign
+conventions as the condensed path; forces scaled by ``s_K = max|K_ff|``).  The Jacobian is
+constant and sparse.  (1) SNES VI (``vinewtonrsls``, then ``vinewtonssls``; MUMPS LU; options
+under ``-meicp_static_``) on the system with :data:`MIXED_REG` added on the diagonal of the
+β± and λ rows — without it the λ row has no diagonal and a sticking contact is a degenerate
+pair (β⁺, β⁻ columns opposite, λ ± slip rows both 0), which makes the Newton systems
+singular.  (2) The contact states are read from that iterate and the equalities they imply
+(gap = 0 or r_n = 0; slip = 0, r_t = ∓μ r_n or r_t = 0) are solved exactly in
+``(u_f, r_n, r_t)`` (sparse LU): the regularisation is gone.  (3) The certificate —
+complementarity of every pair relative to the force scale F, displacement scale D and F·D,
+and ``‖K_ff u_f − b0 − C r‖∞ / F``, both from the unregularised sparse data — must be
+≤ :data:`MIXED_CERT_TOL`; if not, the states are corrected as in a primal-dual active-set
+method (penetration → contact, tension → separated, outside the cone → slip, slip against
+the friction → stick) and (2) repeated.  No certificate: a failed result with the SNES
+reasons, no states.  The mixed path does not classify the LCP matrix (the mixed matrix is
+not the contact operator) and has no ``lcp_matrix``.
 """
 
 from __future__ import annotations
@@ -472,11 +500,331 @@ def _condense(lu, C_r, nr):
     return 0.5 * (G + G.T)
 
 
+# --------------------------------------------------------------------------- mixed formulation
+
+#: formulation="auto" uses the condensed (dense) path up to this many contacts, else mixed
+AUTO_CONDENSED_LIMIT = 200
+#: relative diagonal regularisation of the β± and λ rows in the SNES VI stage of the mixed
+#: formulation (removed again by the certified polish)
+MIXED_REG = 1e-8
+#: relative threshold that reads contact states from the (regularised) SNES iterate
+MIXED_ID_TOL = 1e-6
+#: most active-set corrections of the polish
+MIXED_POLISH_ITERS = 40
+#: certificate tolerance of the mixed formulation (complementarity and equilibrium)
+MIXED_CERT_TOL = 1e-9
+#: options prefix of the mixed formulation's SNES VI
+MIXED_PREFIX = "meicp_static_"
+
+# per-contact states of the polish
+_SEP, _STICK, _PLUS, _MINUS, _CONTACT = 0, 1, 2, 3, 4
+
+
+class _MixedData:
+    """The sparse mixed LCP in scaled variables: z = (u_f, ρ_n, ρ⁺, ρ⁻, λ), forces r = s_K·ρ."""
+
+    def __init__(self, K_ff, b0, A_nf, A_tf, A_np, A_tp, u_p, active, fric, mu):
+        self.nf = K_ff.shape[0]
+        self.nN, self.nF = active.size, fric.size
+        self.sK = float(np.max(np.abs(K_ff.data))) if K_ff.nnz else 1.0
+        self.Cn = A_nf[active].tocsr()                        # nN × nf
+        self.Ct = A_tf[fric].tocsr()                          # nF × nf
+        self.gn0 = A_np[active] @ u_p                         # gap at u_f = 0
+        self.gt0 = A_tp[fric] @ u_p                           # slip at u_f = 0
+        self.K = (K_ff / self.sK).tocsr()
+        self.b = b0 / self.sK
+        self.b0 = b0
+        self.K_ff = K_ff
+        self.mu_f = mu[fric]
+        self.pos = np.searchsorted(active, fric)              # friction contact → its normal row
+        E = sp.csr_matrix((self.mu_f, (np.arange(self.nF), self.pos)), shape=(self.nF, self.nN))
+        self.E = E
+        nf, nN, nF = self.nf, self.nN, self.nF
+        o = np.cumsum([0, nf, nN, nF, nF, nF])
+        self.sl = {k: slice(o[i], o[i + 1]) for i, k in enumerate(("u", "n", "p", "m", "l"))}
+        self.n = int(o[-1])
+        I = sp.identity(nF, format="csr")
+        if nF:
+            self.J0 = sp.bmat([
+                [self.K, -self.Cn.T, -self.Ct.T, self.Ct.T, None],
+                [self.Cn, None, None, None, None],
+                [self.Ct, None, None, None, I],
+                [-self.Ct, None, None, None, I],
+                [None, E, -I, -I, None]], format="csr")
+        elif nN:
+            self.J0 = sp.bmat([[self.K, -self.Cn.T], [self.Cn, None]], format="csr")
+        else:
+            self.J0 = self.K.copy()
+        self.J0 = sp.csr_matrix(self.J0, shape=(self.n, self.n))
+        self.q = np.concatenate([-self.b, self.gn0, self.gt0, -self.gt0, np.zeros(nF)])
+        self.lower = np.concatenate([np.full(nf, -np.inf), np.zeros(nN + 3 * nF)])
+        self.upper = np.full(self.n, np.inf)
+
+    def regularised(self, eps):
+        d = np.zeros(self.n)
+        d[self.nf + self.nN:] = eps
+        return (self.J0 + sp.diags(d)).tocsr()
+
+    def split(self, z):
+        s = self.sl
+        return z[s["u"]], z[s["n"]], z[s["p"]], z[s["m"]], z[s["l"]]
+
+    def scales(self, z):
+        u, rn, rp, rm, lam = self.split(z)
+        F = max(float(np.max(np.abs(z[self.nf:self.nf + self.nN + 2 * self.nF]), initial=0.0)),
+                float(np.max(np.abs(self.b), initial=0.0)))
+        D = max(float(np.max(np.abs(u), initial=0.0)), float(np.max(np.abs(self.gn0), initial=0.0)),
+                float(np.max(np.abs(self.gt0), initial=0.0)), float(np.max(np.abs(lam), initial=0.0)))
+        return F, D
+
+    def certificate(self, z):
+        """``(complementarity residual, equilibrium residual)``, both relative: per pair
+        (r_n ⊥ gap, β± ⊥ λ ± slip, λ ⊥ μ r_n − β⁺ − β⁻) the bound violations of each side and
+        the product, over the force scale F, the displacement scale D and F·D; the
+        equilibrium ``‖K_ff u_f − b0 − C r‖∞ / F`` — all from the unregularised sparse data."""
+        w = self.J0 @ z + self.q
+        F, D = self.scales(z)
+        F, D = max(F, 1e-300), max(D, 1e-300)
+        nf, nN, nF = self.nf, self.nN, self.nF
+        x, wc = z[nf:], w[nf:]
+        is_force = np.concatenate([np.ones(nN + 2 * nF, bool), np.zeros(nF, bool)])
+        xs = np.where(is_force, F, D)       # scale of the variable
+        ws = np.where(is_force, D, F)       # scale of its complementary function
+        comp = 0.0
+        if x.size:
+            comp = max(float(np.max(-x / xs, initial=0.0)), float(np.max(-wc / ws, initial=0.0)),
+                       float(np.max(np.abs(x * wc) / (F * D), initial=0.0)))
+        eq = float(np.max(np.abs(w[:nf]), initial=0.0)) / F
+        return comp, eq
+
+    def identify(self, z):
+        """States read from an iterate (tolerant: MIXED_ID_TOL)."""
+        u, rn, rp, rm, lam = self.split(z)
+        F, D = self.scales(z)
+        t = MIXED_ID_TOL
+        sn = np.where(rn > t * F, _CONTACT, _SEP)
+        st = np.full(self.nF, _SEP)
+        rt = rp - rm
+        rnf = rn[self.pos]
+        slip = self.Ct @ u + self.gt0
+        incontact = sn[self.pos] == _CONTACT
+        sat = np.abs(rt) >= self.mu_f * rnf * (1 - t)
+        moving = lam > t * D
+        d = np.where(rt != 0, -np.sign(rt), np.sign(slip))
+        st[incontact] = _STICK
+        sl = incontact & (sat | moving)
+        st[sl & (d >= 0)] = _PLUS
+        st[sl & (d < 0)] = _MINUS
+        return sn, st
+
+    def polish(self, sn, st, comm):
+        """Exact solve of the equalities of the given states in (u_f, ρ_n, ρ_t), then
+        (β⁺, β⁻, λ) from ρ_t and the slip.  Returns z or None (singular)."""
+        nf, nN, nF = self.nf, self.nN, self.nF
+        con = (sn == _CONTACT).astype(float)
+        sep_f = (st == _SEP).astype(float)
+        stk = (st == _STICK).astype(float)
+        sgn = np.where(st == _PLUS, 1.0, np.where(st == _MINUS, -1.0, 0.0))
+        slp = np.abs(sgn)
+        # normal rows: contact → gap = 0; separated → ρ_n = 0
+        Rn_u = sp.diags(con) @ self.Cn
+        Rn_n = sp.diags(1.0 - con)
+        rhs_n = -con * self.gn0
+        # tangential rows: stick → slip = 0; slip s → ρ_t + s μ ρ_n = 0; separated → ρ_t = 0
+        Rt_u = sp.diags(stk) @ self.Ct
+        Rt_n = sp.diags(sgn) @ self.E
+        Rt_t = sp.diags(slp + sep_f)
+        rhs_t = -stk * self.gt0
+        blocks = [[self.K, -self.Cn.T, -self.Ct.T], [Rn_u, Rn_n, None], [Rt_u, Rt_n, Rt_t]]
+        if nF == 0:
+            blocks = [[self.K, -self.Cn.T], [Rn_u, Rn_n]]
+        A = sp.bmat(blocks, format="csr")
+        rhs = np.concatenate([self.b, rhs_n, rhs_t]) if nF else np.concatenate([self.b, rhs_n])
+        from ..petsc.lcp import lu_solve
+        sol, ok = lu_solve(A, rhs, comm=comm, prefix=MIXED_PREFIX + "polish_",
+                           options={"mat_mumps_icntl_14": 400})
+        if not ok:
+            return None
+        u, rn = sol[:nf], sol[nf:nf + nN]
+        rt = sol[nf + nN:] if nF else np.zeros(0)
+        slip = self.Ct @ u + self.gt0
+        lam = np.where(slp > 0, sgn * slip, np.where(sep_f > 0, np.abs(slip), 0.0))
+        return np.concatenate([u, rn, np.maximum(rt, 0.0), np.maximum(-rt, 0.0), lam])
+
+    def correct(self, z, sn, st):
+        """One primal-dual active-set correction of the states from a polished z; returns
+        ``(sn, st, changed)``."""
+        u, rn, rp, rm, lam = self.split(z)
+        F, D = self.scales(z)
+        t = MIXED_CERT_TOL
+        gap = self.Cn @ u + self.gn0
+        slip = self.Ct @ u + self.gt0
+        rt = rp - rm
+        sn2, st2 = sn.copy(), st.copy()
+        sn2[(sn == _SEP) & (gap < -t * D)] = _CONTACT
+        sn2[(sn == _CONTACT) & (rn < -t * F)] = _SEP
+        con_f = sn2[self.pos] == _CONTACT
+        st2[~con_f] = _SEP
+        newly = con_f & (st == _SEP)
+        st2[newly] = _STICK
+        rnf = rn[self.pos]
+        over = (st == _STICK) & con_f & (np.abs(rt) > self.mu_f * rnf * (1 + t) + t * F)
+        st2[over & (rt < 0)] = _PLUS
+        st2[over & (rt >= 0)] = _MINUS
+        sgn = np.where(st == _PLUS, 1.0, np.where(st == _MINUS, -1.0, 0.0))
+        back = (sgn != 0) & con_f & (sgn * slip < -t * D)
+        st2[back] = _STICK
+        changed = bool(np.any(sn2 != sn) or np.any(st2 != st))
+        return sn2, st2, changed
+
+
+def _size(comm) -> int:
+    if comm is None:
+        return 1
+    return comm.getSize() if hasattr(comm, "getSize") else comm.Get_size()
+
+
+def _solve_mixed(data: _MixedData, comm, petsc_options, notes) -> tuple:
+    """SNES VI on the regularised mixed LCP, then the certified polish.  Returns
+    ``(z or None, info dict)``."""
+    from ..petsc.lcp import snes_vi_affine
+
+    info = {"attempts": []}
+    J = data.regularised(MIXED_REG)
+    pcomm = comm if comm is not None and _size(comm) > 1 else None
+    best = None
+    types = ("vinewtonrsls", "vinewtonssls")
+    if petsc_options and "snes_type" in petsc_options:
+        types = types[:1]  # the caller's choice overrides both defaults: one attempt
+    for snes_type in types:
+        t0 = time.perf_counter()
+        z, its, reason, sec, snes_type = snes_vi_affine(J, data.q, data.lower, data.upper, comm=pcomm,
+                                             prefix=MIXED_PREFIX,
+                                             defaults={"snes_type": snes_type, "snes_rtol": 1e-12,
+                                                       "snes_max_it": 100,
+                                                       # delayed pivots of the saddle-point
+                                                       # systems overflow MUMPS' default workspace
+                                                       "mat_mumps_icntl_14": 400},
+                                             options=petsc_options)
+        attempt = {"snes_type": snes_type, "iterations": its, "reason": reason,
+                   "seconds": time.perf_counter() - t0}
+        info["attempts"].append(attempt)
+        if not np.all(np.isfinite(z)):
+            continue
+        sn, st = data.identify(z)
+        zp = None
+        for k in range(MIXED_POLISH_ITERS):
+            zp = data.polish(sn, st, pcomm)
+            if zp is None:
+                break
+            comp, eq = data.certificate(zp)
+            if comp <= MIXED_CERT_TOL and eq <= MIXED_CERT_TOL:
+                attempt.update(polish_iterations=k + 1, certificate=(comp, eq))
+                info.update(attempt)
+                return zp, info
+            sn, st, changed = data.correct(zp, sn, st)
+            if not changed:
+                break
+        if zp is not None:
+            cert = data.certificate(zp)
+            attempt["certificate"] = cert
+            if best is None or max(cert) < max(best[1]):
+                best = (zp, cert)
+    info["best_certificate"] = best[1] if best else None
+    return None, info
+
+
+def _static_mixed(scene, model, cts, K_ff, b0, free, presc, u_p, A_nf, A_tf, A_np, A_tp, held_n, held_t,
+                  active, fric, N, keep, tol, notes, timings, t_start, comm, petsc_options):
+    """The sparse mixed formulation (module docstring, "Mixed formulation")."""
+    nc = len(cts.labels)
+    k = N.shape[1]
+    t0 = time.perf_counter()
+    data = _MixedData(K_ff, b0, A_nf, A_tf, A_np, A_tp, u_p, active, fric, cts.mu)
+    timings["assemble_mixed"] = time.perf_counter() - t0
+    notes = list(notes) + [
+        "formulation = mixed: the LCP matrix is not classified (the mixed matrix, displacements and "
+        "reactions together, is not the contact operator: its classes say nothing about the "
+        "contact problem; the condensed formulation classifies it)"]
+    t0 = time.perf_counter()
+    z, info = _solve_mixed(data, comm, petsc_options, notes) if data.n else (np.zeros(0), {"attempts": []})
+    timings["lcp"] = time.perf_counter() - t0
+    n_lcp = data.nN + 3 * data.nF
+    lay = {"formulation": "mixed", "unknowns": data.n, "normal": active, "friction_set": fric,
+           "contacts": list(cts.labels), "rigid_modes": k, "sets": [s[:3] for s in cts.sets],
+           "scale": 1.0 / data.sK, "attempts": info.get("attempts", [])}
+    reason = "; ".join(f"{a['snes_type']}: {a['reason']} after {a['iterations']} iterations"
+                       for a in info.get("attempts", []))
+    result = StaticResult(layout=lay, friction={s[0]: s[3] for s in cts.sets}, rigid_modes=k, notes=notes)
+    result.timings = timings
+    mus = ", ".join(f"{name}: μ = {mu:g}" for name, _, _, mu in cts.sets)
+    result.guarantees = [f"Static mixed LCP ({mus}): {data.nf} displacement unknowns, {data.nN} normal "
+                         f"reactions, {data.nF} frictional contacts (β⁺, β⁻, λ each) — {data.n} unknowns; "
+                         "matrix classes not computed (mixed formulation)."]
+    if z is None:
+        result.status = "failed"
+        best = info.get("best_certificate")
+        result.message = (f"the static mixed LCP ({data.n} unknowns) was not solved: SNES VI {reason}; "
+                          + (f"best polished certificate (complementarity, equilibrium) = "
+                             f"({best[0]:.1e}, {best[1]:.1e}) > {MIXED_CERT_TOL:g}" if best else
+                             "no iterate could be polished")
+                          + "; no contact states reported")
+        result.guarantees.append("For this load no equilibrium was certified.")
+        timings["total"] = time.perf_counter() - t_start
+        return result
+    t0 = time.perf_counter()
+    comp, eq = data.certificate(z) if data.n else (0.0, 0.0)
+    u_f, rn_s, rp, rm, lam = data.split(z) if data.n else (np.zeros(0),) * 5
+    r_n = np.zeros(nc)
+    r_t = np.zeros(nc)
+    r_n[active] = rn_s * data.sK
+    r_t[fric] = (rp - rm) * data.sK
+    u = np.zeros(model.n_dofs)
+    u[free] = u_f
+    u[presc] = u_p
+    gap = cts.A_n @ u
+    slip = cts.A_t @ u
+    F = max(float(np.max(np.abs(np.concatenate([r_n, r_t])))) if nc else 0.0,
+            float(np.max(np.abs(b0))) if b0.size else 0.0)
+    D = float(np.max(np.abs(u))) if u.size else 0.0
+    C_f = sp.hstack([A_nf[active].T, A_tf[fric].T]).tocsr()
+    res = K_ff @ u_f - b0 - C_f @ np.concatenate([r_n[active], r_t[fric]])
+    result.equilibrium_residual = float(np.max(np.abs(res))) / F if res.size and F > 0 else 0.0
+    _held_contacts(cts, gap, slip, r_n, r_t, held_n, held_t, tol, D)
+    c0_t = np.zeros(nc)
+    zero_mu = np.flatnonzero(~held_n & ~held_t & (cts.mu == 0))
+    if zero_mu.size and np.any(np.abs(slip[zero_mu]) <= tol * D):
+        # the load's tangential response at r = 0 (direction rule of μ = 0): one solve with the
+        # rigid modes pinned as in the condensed formulation
+        K_rr = K_ff[keep][:, keep].tocsc()
+        if K_rr.shape[0]:
+            u0_r = spla.spsolve(K_rr, b0[keep])
+            c0_t[zero_mu] = A_tf[zero_mu][:, keep] @ u0_r + A_tp[zero_mu] @ u_p
+    states = _classify_states(r_n, r_t, gap, slip, cts.mu, held_n, held_t, c0_t, tol, F, D, result.notes,
+                              cts.labels)
+    _store_contacts(result, cts, states, (r_n, r_t, gap, slip, held_n), u, tol, F, D, MIXED_CERT_TOL)
+    result.status = SOLVED
+    result.residual = comp
+    result.iterations = int(info.get("iterations", 0))
+    result.guarantees.append(f"For this load an equilibrium exists: the mixed LCP solution passed its "
+                             f"certificate (complementarity {comp:.1e}, equilibrium {eq:.1e}).")
+    counts = {s: states.count(s) for s in ("stick", "slip+", "slip-", "separated", "grazing") if s in states}
+    how = (f"SNES {info.get('snes_type')} ({info.get('reason')}, {info.get('iterations')} it) + "
+           f"{info.get('polish_iterations')} polish" if info.get("attempts") else "no unknowns")
+    result.message = (f"{nc} contacts ({', '.join(f'{v} {s}' for s, v in counts.items())}); mixed LCP "
+                      f"{data.n} unknowns ({n_lcp} contact) by {how}, certificate {comp:.1e}; "
+                      f"equilibrium residual {result.equilibrium_residual:.1e}")
+    timings["states"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t_start
+    return result
+
+
 # --------------------------------------------------------------------------- entry point
 
 def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "auto",
                        classify_limit: int = 12, lcp_tol: float = LCP_TOL,
-                       allow_floating: bool = True, **lcp_options) -> StaticResult:
+                       allow_floating: bool = True, formulation: str = "auto", comm=None,
+                       petsc_options: dict | None = None, **lcp_options) -> StaticResult:
     """Static frictional equilibrium of ``scene`` under its ``[load]``; every contact's state.
 
     scene: a :class:`~meicp.io.scene.Scene` (or a scene file path); model: its
@@ -490,10 +838,17 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     LCP matrix; allow_floating: condense rigid components held by contact (module
     docstring) instead of raising.
 
-    Serial SciPy, deterministic: under MPI every rank may call it with the same scene and
+    formulation: ``"condensed"`` (dense compliance, Lemke; classifies the LCP matrix),
+    ``"mixed"`` (sparse, displacements kept, PETSc SNES VI + certified polish; no matrix
+    classes; options ``petsc_options`` under ``-meicp_static_``) or ``"auto"`` (condensed up
+    to :data:`AUTO_CONDENSED_LIMIT` contacts, else mixed).  comm: with several ranks the
+    mixed formulation's PETSc solves are distributed over it (collective then: every rank
+    calls with the same scene); the condensed formulation ignores it.
+
+    Serial SciPy (condensed), deterministic: under MPI every rank may call it with the same scene and
     gets the same answer.  Raises :class:`ProblemError` before any solve for a scene with no
     contact set ("a load with no contact"), a bad load, more than :data:`MAX_CONTACTS`
-    contacts, or a singular stiffness (module docstring).  A failed LCP is not an
+    contacts for the condensed formulation, or a singular stiffness (module docstring).  A failed LCP is not an
     exception: ``status`` comes from the LCP and no states are reported.
     """
     from ..io.scene import Scene, load_scene
@@ -520,10 +875,14 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
         raise ProblemError("contact: required when boundary.bottom = \"contact\"")
     nsets = int(has_base) + len(scene.frictional_interfaces())
     nc_total = nsets * scene.nx
-    if nc_total > MAX_CONTACTS:
+    if formulation not in ("auto", "condensed", "mixed"):
+        raise ProblemError(f"formulation must be 'auto', 'condensed' or 'mixed', got {formulation!r}")
+    if formulation == "auto":
+        formulation = "condensed" if nc_total <= AUTO_CONDENSED_LIMIT else "mixed"
+    if formulation == "condensed" and nc_total > MAX_CONTACTS:
         raise ProblemError(f"static equilibrium: {nc_total} contacts exceed the condensed dense "
-                           f"formulation's limit of {MAX_CONTACTS}; the sparse mixed formulation "
-                           "is not implemented yet")
+                           f"formulation's limit of {MAX_CONTACTS}; use formulation=\"mixed\" (the "
+                           "sparse mixed formulation)")
     model = model if model is not None else LatticeModel(scene)
     if not isinstance(model, LatticeModel) or (model.scene is not scene and model.scene != scene):
         raise ProblemError("model must be the LatticeModel of this scene")
@@ -560,6 +919,20 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
                                                  model, N, owner, comp_nodes, free, np.arange(k))
                                              + " (allow_floating=False)"))
     keep = np.ones(free.size, dtype=bool)
+    if k and formulation == "mixed":
+        _, _, piv = sla.qr(N.T, mode="economic", pivoting=True)
+        keep[piv[:k]] = False
+        H = sp.hstack([A_nf[active].T, A_tf[fric].T]).tocsr().T @ N
+        sv = np.linalg.svd(H, compute_uv=False) if H.size else np.zeros(0)
+        if sv.size < k or sv[-1] <= RANK_RTOL * max(sv[0] if sv.size else 0.0, 1.0):
+            raise ProblemError("static equilibrium: a rigid-body mode of "
+                               + _describe_modes(model, N, owner, comp_nodes, free, np.arange(k))
+                               + " is held neither by the Dirichlet boundary nor by any contact law")
+    if formulation == "mixed":
+        timings["factor"] = time.perf_counter() - t0
+        return _static_mixed(scene, model, cts, K_ff, b0, free, presc, u_p, A_nf, A_tf, A_np, A_tp,
+                             held_n, held_t, active, fric, N, keep, tol, notes, timings, t_start, comm,
+                             petsc_options)
     if k:
         kn = float(np.abs(K_ff @ N).max()) / max(float(np.abs(K_ff.data).max()), 1e-300)
         if kn > 1e-8:  # the rigid modes must be in the null space of K (a bug otherwise)
@@ -686,16 +1059,7 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     D = float(np.max(np.abs(u))) if u.size else 0.0
     res = K_ff @ u_f - load_r
     result.equilibrium_residual = float(np.max(np.abs(res))) / F if res.size and F > 0 else 0.0
-    for c in np.flatnonzero(held_n):
-        if gap[c] < -tol * D:
-            name, i = cts.labels[c]
-            raise ProblemError(f"static equilibrium: the prescribed displacements close contact "
-                               f"{name!r} column {i} by {-gap[c]:g} (penetration): the load moves "
-                               "both sides of a contact held by the Dirichlet boundary into each other")
-    # friction on a tangentially prescribed contact acts on prescribed DOFs only
-    tang_held = np.flatnonzero(~held_n & held_t & (cts.mu > 0))
-    moving = np.abs(slip[tang_held]) > tol * D
-    r_t[tang_held] = np.where(moving, -np.sign(slip[tang_held]) * cts.mu[tang_held] * r_n[tang_held], 0.0)
+    _held_contacts(cts, gap, slip, r_n, r_t, held_n, held_t, tol, D)
     c0_t = np.zeros(nc)
     c0_t[fric] = c0[nN:]
     # μ = 0 contacts: the load's tangential response at r = 0 (for the direction rule)
@@ -705,21 +1069,7 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
         c0_t[zero_mu] = At0 @ u0_r + A_tp[zero_mu] @ u_p
     states = _classify_states(r_n, r_t, gap, slip, cts.mu, held_n, held_t, c0_t, tol, F, D, result.notes,
                               cts.labels)
-    result.tolerances = {"tol": tol, "force_scale": F, "displacement_scale": D,
-                         "contact_force": tol * F, "gap": tol * D, "slip": tol * D,
-                         "cone": f"|r_t| >= mu*r_n*(1 - {tol:g}) - {tol * F:.3g}",
-                         "lcp_certificate": lcp_tol}
-    result.u = u
-    for name, a, b, _mu in cts.sets:
-        if name == BASE:
-            result.states = states[a:b]
-            result.r_n, result.r_t, result.gap, result.slip = r_n[a:b], r_t[a:b], gap[a:b], slip[a:b]
-            result.held = held_n[a:b].copy()
-        else:
-            result.interface_states[name] = states[a:b]
-            result.interface_r_n[name], result.interface_r_t[name] = r_n[a:b], r_t[a:b]
-            result.interface_gap[name], result.interface_slip[name] = gap[a:b], slip[a:b]
-            result.interface_held[name] = held_n[a:b].copy()
+    _store_contacts(result, cts, states, (r_n, r_t, gap, slip, held_n), u, tol, F, D, lcp_tol)
     result.status = SOLVED
     counts = {s: states.count(s) for s in ("stick", "slip+", "slip-", "separated", "grazing") if s in states}
     result.message = (f"{nc} contacts ({', '.join(f'{v} {s}' for s, v in counts.items())}); LCP "
@@ -731,6 +1081,42 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
 
 
 # --------------------------------------------------------------------------- states
+
+def _held_contacts(cts, gap, slip, r_n, r_t, held_n, held_t, tol, D) -> None:
+    """Contacts the Dirichlet boundary holds: a prescribed penetration is an error; on a
+    tangentially prescribed contact friction acts on prescribed DOFs only, so r_t (in place)
+    is ∓μ r_n when it moves and 0 when it does not."""
+    for c in np.flatnonzero(held_n):
+        if gap[c] < -tol * D:
+            name, i = cts.labels[c]
+            raise ProblemError(f"static equilibrium: the prescribed displacements close contact "
+                               f"{name!r} column {i} by {-gap[c]:g} (penetration): the load moves "
+                               "both sides of a contact held by the Dirichlet boundary into each other")
+    tang_held = np.flatnonzero(~held_n & held_t & (cts.mu > 0))
+    moving = np.abs(slip[tang_held]) > tol * D
+    r_t[tang_held] = np.where(moving, -np.sign(slip[tang_held]) * cts.mu[tang_held] * r_n[tang_held], 0.0)
+
+
+def _store_contacts(result, cts, states, per_contact, u, tol, F, D, certificate_tol) -> None:
+    """Put the classified states, the per-contact arrays (r_n, r_t, gap, slip, held) and the
+    tolerances used into ``result``, split into the base and each frictional interface."""
+    r_n, r_t, gap, slip, held_n = per_contact
+    result.tolerances = {"tol": tol, "force_scale": F, "displacement_scale": D,
+                         "contact_force": tol * F, "gap": tol * D, "slip": tol * D,
+                         "cone": f"|r_t| >= mu*r_n*(1 - {tol:g}) - {tol * F:.3g}",
+                         "lcp_certificate": certificate_tol}
+    result.u = u
+    for name, a, b, _mu in cts.sets:
+        if name == BASE:
+            result.states = states[a:b]
+            result.r_n, result.r_t, result.gap, result.slip = r_n[a:b], r_t[a:b], gap[a:b], slip[a:b]
+            result.held = held_n[a:b].copy()
+        else:
+            result.interface_states[name] = states[a:b]
+            result.interface_r_n[name], result.interface_r_t[name] = r_n[a:b], r_t[a:b]
+            result.interface_gap[name], result.interface_slip[name] = gap[a:b], slip[a:b]
+            result.interface_held[name] = held_n[a:b].copy()
+
 
 def _classify_states(r_n, r_t, gap, slip, mu, held_n, held_t, c0_t, tol, F, D, notes, labels) -> list:
     out = []
@@ -810,4 +1196,4 @@ def _guarantees(classes, Gnn, cts, active, fric, k, lcp) -> list:
 
 
 __all__ = ["StaticResult", "static_equilibrium", "prescribed_displacements", "body_force",
-           "TOL", "MAX_CONTACTS"]
+           "TOL", "MAX_CONTACTS", "AUTO_CONDENSED_LIMIT"]

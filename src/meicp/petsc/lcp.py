@@ -38,42 +38,14 @@ def _petsc_operands(M, q, comm):
 
 def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
             snes_type: str = "vinewtonrsls", options: dict | None = None):
-    """Solve LCP(q, M) with SNES VI.  Returns ``(x, iterations, reason_str, seconds)`` with x
-    gathered on every rank.  Collective."""
-    PETSc = import_petsc()
-    A, qv, owned = _petsc_operands(M, q, comm)
-    J = A.duplicate(copy=True)
-    x = A.createVecRight()
-    x.set(0.0)
-    lower, upper = x.duplicate(), x.duplicate()
-    lower.set(0.0)
-    upper.set(PETSc.INFINITY)
-    r = x.duplicate()
-
-    def residual(snes, X, F):
-        A.mult(X, F)
-        F.axpy(1.0, qv)
-
-    def jacobian(snes, X, Jm, P):
-        A.copy(Jm, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-
-    snes = PETSc.SNES().create(comm=A.getComm())
-    try:
-        snes.setFunction(residual, r)
-        snes.setJacobian(jacobian, J)
-        snes.setVariableBounds(lower, upper)
-        defaults = {"snes_type": snes_type, "snes_max_it": max_iter, "snes_atol": 1e-30,
-                    "snes_rtol": tol, "snes_stol": 0.0, "ksp_type": "preonly", "pc_type": "lu",
-                    "pc_factor_mat_solver_type": "mumps", "snes_linesearch_type": "basic"}
-        seconds, reason, its = configure_and_solve(snes, PREFIX, defaults, options, lambda: snes.solve(None, x))
-        out = vec_to_numpy(x)
-    finally:
-        snes.destroy()
-        for obj in (J, x, lower, upper, r, qv):
-            obj.destroy()
-        if owned:
-            A.destroy()
-    return out, its, reason, seconds
+    """Solve LCP(q, M) (bounds 0 ≤ x ≤ ∞) with SNES VI through :func:`snes_vi_affine`.
+    Returns ``(x, iterations, reason_str, seconds)`` with x gathered on every rank.  Collective."""
+    n = len(q)
+    defaults = {"snes_type": snes_type, "snes_max_it": max_iter, "snes_atol": 1e-30,
+                "snes_rtol": tol, "snes_stol": 0.0}
+    x, its, reason, seconds, _ = snes_vi_affine(M, q, np.zeros(n), np.full(n, np.inf), comm=comm,
+                                                prefix=PREFIX, defaults=defaults, options=options)
+    return x, its, reason, seconds
 
 
 def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
@@ -149,3 +121,100 @@ def max_abs_entry(A) -> float:
     _, _, data = A.getValuesCSR()
     local = float(np.max(np.abs(data))) if data.size else 0.0
     return A.getComm().tompi4py().allreduce(local, op=MPI.MAX)
+
+
+def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defaults: dict | None = None,
+                   options: dict | None = None, x0=None):
+    """Solve the affine VI ``lower ≤ z ≤ upper ⊥ F(z) = J z + q`` (a mixed complementarity
+    problem: unbounded entries are equations) by SNES VI with a constant Jacobian J.
+
+    J: a PETSc Mat or a SciPy matrix (every rank holds it; distributed with
+    :func:`mat_from_scipy` over ``comm``); q, lower, upper, x0: full-length arrays on every rank
+    (±inf for no bound).  The Jacobian is copied back from J in every callback
+    (``vinewtonssls`` overwrites it, DESIGN §6).  Options ``defaults`` < ``options`` < command
+    line under ``prefix``.  Returns ``(z, iterations, reason_str, seconds, snes_type)`` with z
+    gathered on every rank; a PETSc error inside the solve becomes ``reason_str = "PETSC_ERROR: ..."``.
+    Collective.
+    """
+    PETSc = import_petsc()
+    if not isinstance(J, PETSc.Mat):
+        # vinewtonssls adds to the diagonal (MatDiagonalSet): store it, explicit zeros included
+        import scipy.sparse as sp
+
+        c = sp.coo_matrix(J)
+        n = c.shape[0]
+        J = sp.csr_matrix((np.concatenate([c.data, np.zeros(n)]),
+                           (np.concatenate([c.row, np.arange(n)]), np.concatenate([c.col, np.arange(n)]))),
+                          shape=c.shape)
+    A, qv, owned = _petsc_operands(J, q, comm)
+    Jm = A.duplicate(copy=True)
+    x = A.createVecRight()
+    lo, hi = x.getOwnershipRange()
+
+    def vec(values):
+        v = x.duplicate()
+        v.setArray(np.asarray(values, dtype=PETSc.ScalarType)[lo:hi])
+        return v
+
+    xl = vec(np.where(np.isfinite(lower), lower, PETSc.NINFINITY))
+    xu = vec(np.where(np.isfinite(upper), upper, PETSc.INFINITY))
+    x.setArray(np.zeros(hi - lo) if x0 is None else np.asarray(x0, dtype=PETSc.ScalarType)[lo:hi])
+    r = x.duplicate()
+
+    def residual(snes, X, F):
+        A.mult(X, F)
+        F.axpy(1.0, qv)
+
+    def jacobian(snes, X, Jmat, P):
+        A.copy(Jmat, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+
+    snes = PETSc.SNES().create(comm=A.getComm())
+    try:
+        snes.setFunction(residual, r)
+        snes.setJacobian(jacobian, Jm)
+        snes.setVariableBounds(xl, xu)
+        base = {"snes_type": "vinewtonrsls", "snes_max_it": 100, "snes_atol": 1e-30, "snes_rtol": 1e-12,
+                "snes_stol": 0.0, "ksp_type": "preonly", "pc_type": "lu",
+                "pc_factor_mat_solver_type": "mumps", "snes_linesearch_type": "basic"}
+        base.update(defaults or {})
+        try:
+            seconds, reason, its = configure_and_solve(snes, prefix, base, options,
+                                                       lambda: snes.solve(None, x))
+        except PETSc.Error as exc:  # e.g. MUMPS on a singular reduced system
+            seconds, reason, its = float("nan"), f"PETSC_ERROR: {exc}", snes.getIterationNumber()
+        out = vec_to_numpy(x)
+        used = snes.getType()
+    finally:
+        snes.destroy()
+        for obj in (Jm, x, xl, xu, r, qv):
+            obj.destroy()
+        if owned:
+            A.destroy()
+    return out, its, reason, seconds, used
+
+
+def lu_solve(A, b, *, comm=None, prefix: str = "meicp_lu_", options: dict | None = None):
+    """``A⁻¹ b`` by MUMPS LU (KSP preonly) for a SciPy matrix every rank holds, distributed over
+    ``comm``; the solution is gathered on every rank.  Returns ``(x, ok)``: ``ok`` is False
+    when MUMPS failed (singular matrix).  Collective."""
+    PETSc = import_petsc()
+    M, bv, owned = _petsc_operands(A, b, comm)
+    x = M.createVecRight()
+    ksp = PETSc.KSP().create(comm=M.getComm())
+    ok = True
+    try:
+        ksp.setOperators(M)
+        defaults = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+        try:
+            configure_and_solve(ksp, prefix, defaults, options, lambda: ksp.solve(bv, x))
+            ok = ksp.getConvergedReason() >= 0
+        except PETSc.Error:
+            ok = False
+        out = vec_to_numpy(x)
+    finally:
+        ksp.destroy()
+        for obj in (x, bv):
+            obj.destroy()
+        if owned:
+            M.destroy()
+    return out, ok and bool(np.all(np.isfinite(out)))

@@ -93,7 +93,7 @@ def options_used(name: str) -> bool:
 
 
 def configure_and_solve(solver, prefix: str, defaults: dict, options: dict | None, solve) -> tuple:
-    """Give a SNES or TAO its options (code defaults < ``options`` < command line) under
+    """Give a SNES, TAO or KSP its options (code defaults < ``options`` < command line) under
     ``prefix``, call ``solve()`` and return ``(seconds, reason_name, iterations)``."""
     t0 = time.perf_counter()
     with OptionsScope(prefix, defaults, options):
@@ -105,9 +105,10 @@ def configure_and_solve(solver, prefix: str, defaults: dict, options: dict | Non
 
 
 def reason_name(solver) -> str:
-    """``NAME (code)`` of a SNES or TAO converged reason."""
+    """``NAME (code)`` of a SNES, KSP or TAO converged reason."""
     PETSc = import_petsc()
-    enum = PETSc.SNES.ConvergedReason if isinstance(solver, PETSc.SNES) else PETSc.TAO.Reason
+    enum = (PETSc.SNES.ConvergedReason if isinstance(solver, PETSc.SNES) else
+            PETSc.KSP.ConvergedReason if isinstance(solver, PETSc.KSP) else PETSc.TAO.Reason)
     value = solver.getConvergedReason()
     for name in dir(enum):
         if not name.startswith("_") and getattr(enum, name) == value:
