@@ -26,3 +26,15 @@ def test_same_modes_on_one_and_two_ranks(comm, name, method):
     # every rank holds the same answer
     sig = comm.allgather([m.sigma for m in par.modes])
     assert all(s == sig[0] for s in sig)
+
+
+def test_symmetric_pencil_stability_is_proved_by_inertia_on_two_ranks(comm):
+    """All contacts sticking: no complementarity, a symmetric pencil; the active-set finds no
+    σ ≥ 0 and the LDLᵀ inertia (MUMPS, in parallel) proves that none exists."""
+    from meicp.contact.instability import analyze
+    from meicp.io.scene import loads_scene
+
+    text = (SCENES / "two_layers.toml").read_text().replace('states = "slip+"', 'states = "stick"')
+    for c in (comm, None):
+        r = analyze(loads_scene(text), comm=c, method="active-set")
+        assert r.stable is True and "inertia" in r.evidence, r.evidence

@@ -20,9 +20,11 @@ def inertia(A) -> tuple[int, int, int]:
     ksp = PETSc.KSP().create(comm=A.getComm())
     try:
         ksp.setOperators(A)
-        # ICNTL(13) = 1: MUMPS keeps the root on one process so that the inertia is exact
+        # PETSc asks MUMPS for the inertia only with ICNTL(13) = 1 (no ScaLAPACK root) and
+        # ICNTL(24) = 1 (null pivot detection), required in parallel
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
-                    "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_13": 1}
+                    "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_13": 1,
+                    "mat_mumps_icntl_24": 1}
         with OptionsScope(PREFIX, defaults):
             ksp.setOptionsPrefix(PREFIX)
             ksp.setFromOptions()
