@@ -35,7 +35,7 @@ def collect(comm=None) -> dict:
         "slepc": "%d.%d.%d" % SLEPc.Sys.getVersion(),
         "petsc scalar": PETSc.ScalarType.__name__,
         "petsc int bytes": PETSc.IntType().itemsize,
-        "mpi": MPI.Get_library_version().splitlines()[0].strip(),
+        "mpi": MPI.Get_library_version().replace("\x00", "").splitlines()[0].strip(),
         "mpi4py": __import__("mpi4py").__version__,
         "ranks": comm.Get_size(),
     }
