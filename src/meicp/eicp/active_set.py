@@ -54,12 +54,16 @@ def _spurious_value(problem: EiCPProblem, target: float) -> float:
 
 def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
                lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
-               options: dict | None = None, prefix: str = "meicp_as_", **_ignored) -> EiCPResult:
+               options: dict | None = None, prefix: str = "meicp_as_", follow: bool = True,
+               **_ignored) -> EiCPResult:
     """One certified MEiCP solution by the active-set search (see the module docstring).
 
     target: shift of the eigen-solves; nev: eigenpairs per solve; lam_min: ignore eigenpairs
     below it (e.g. 0 for divergence modes); support0: the starting S (default all of J);
-    options: PETSc options under ``prefix`` (a scene's ``[petsc]`` table)."""
+    options: PETSc options under ``prefix`` (a scene's ``[petsc]`` table); follow: after the
+    first solve, follow the wanted eigenpair alone (nev = 1, shift just below its previous
+    eigenvalue) — most of a solve's cost is shift-and-invert applications, and a shift next
+    to the wanted eigenvalue needs a handful of them."""
     t0 = time.perf_counter()
     J = problem.J
     if support0 is None:
@@ -97,7 +101,12 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
             removed = np.setdiff1d(J, S)
             t_solve = time.perf_counter()
             try:
-                pairs = solver.solve(removed, initial)
+                if follow and history:
+                    prev = history[-1]["lam"]
+                    pairs = solver.solve(removed, initial, nev=1,
+                                         target=prev - 1e-8 * max(abs(prev), scales[0] / max(scales[1], 1e-300)))
+                else:
+                    pairs = solver.solve(removed, initial)
             except PETSc.Error as exc:  # e.g. an exactly singular shifted matrix at the target
                 status = "petsc_error"
                 message = (f"SLEPc/PETSc error {exc.ierr} in eigen-solve {it} (support of size {S.size}); "

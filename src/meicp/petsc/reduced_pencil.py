@@ -65,10 +65,13 @@ class ReducedPencilSolver:
         self.eps_iterations = 0
         self._configured = False
 
-    def solve(self, removed: np.ndarray, initial: np.ndarray | None = None):
+    def solve(self, removed: np.ndarray, initial: np.ndarray | None = None, *,
+              target: float | None = None, nev: int | None = None):
         """Converged real eigenpairs ``[(λ, ξ, relative_residual)]`` of the pencil without
         the ``removed`` DOFs (global indices, same on every rank), nearest the target first.
-        ξ is a NumPy array on every rank.  Collective."""
+        ``target``/``nev`` override the configured ones for this solve (e.g. to follow one
+        eigenpair with a shift at its previous eigenvalue).  ξ is a NumPy array on every
+        rank.  Collective."""
         PETSc = import_petsc()
         SLEPc = import_slepc()
         same = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
@@ -89,6 +92,13 @@ class ReducedPencilSolver:
                 self.eps.setUp()
             self.unused_options = scope.unused
             self._configured = True
+            self._target = self.eps.getTarget()
+            self._dimensions = self.eps.getDimensions()
+        self.eps.setTarget(self._target if target is None else target)
+        nev_c, ncv_c, mpd_c = self._dimensions
+        # a followed pair (nev given) sits next to the shift: a small basis converges at once
+        self.eps.setDimensions(nev=nev_c if nev is None else nev, ncv=ncv_c if nev is None else nev + 4,
+                               mpd=mpd_c if nev is None else PETSc.DECIDE)
         self.eps.solve()
         self.solves += 1
         self.eps_iterations += self.eps.getIterationNumber()
