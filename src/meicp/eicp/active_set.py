@@ -4,8 +4,8 @@ An outer loop over supports ``S ⊆ J``; each step is one SLEPc solve of the red
 on ``R = F ∪ S`` (:class:`~meicp.petsc.reduced_pencil.ReducedPencilSolver`: zeroed rows and
 columns, fixed pattern, reused symbolic factorisation, warm start).  From the wanted
 eigenpair (λ, ξ) — by default the largest real λ among the ``nev`` eigenvalues nearest
-the target, i.e. the fastest-growing mode of the instability problem — the support is
-updated:
+the target, i.e. the fastest-growing mode of the instability problem; after the first
+solve that pair alone is followed (``follow``) — the support is updated:
 
 - ``ξ`` is oriented so that ``eᵀξ_S > 0``; indices of S with ``ξ_j < 0`` leave S;
 - indices of ``J∖S`` whose dual ``w_j = ((λB − A)ξ)_j`` is negative enter S.
