@@ -779,14 +779,7 @@ def _static_mixed(scene, model, cts, K_ff, b0, free, presc, u_p, A_nf, A_tf, A_n
     r_t = np.zeros(nc)
     r_n[active] = rn_s * data.sK
     r_t[fric] = (rp - rm) * data.sK
-    u = np.zeros(model.n_dofs)
-    u[free] = u_f
-    u[presc] = u_p
-    gap = cts.A_n @ u
-    slip = cts.A_t @ u
-    F = max(float(np.max(np.abs(np.concatenate([r_n, r_t])))) if nc else 0.0,
-            float(np.max(np.abs(b0))) if b0.size else 0.0)
-    D = float(np.max(np.abs(u))) if u.size else 0.0
+    u, gap, slip, F, D = _response(model, cts, free, presc, u_f, u_p, r_n, r_t, b0)
     C_f = sp.hstack([A_nf[active].T, A_tf[fric].T]).tocsr()
     res = K_ff @ u_f - b0 - C_f @ np.concatenate([r_n[active], r_t[fric]])
     result.equilibrium_residual = float(np.max(np.abs(res))) / F if res.size and F > 0 else 0.0
@@ -1049,14 +1042,7 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     if lu is not None:
         u_f[keep] = lu.solve(load_r[keep])
     u_f += N @ alpha
-    u = np.zeros(model.n_dofs)
-    u[free] = u_f
-    u[presc] = u_p
-    gap = cts.A_n @ u
-    slip = cts.A_t @ u
-    F = max(float(np.max(np.abs(np.concatenate([r_n, r_t])))) if nc else 0.0,
-            float(np.max(np.abs(b0))) if b0.size else 0.0)
-    D = float(np.max(np.abs(u))) if u.size else 0.0
+    u, gap, slip, F, D = _response(model, cts, free, presc, u_f, u_p, r_n, r_t, b0)
     res = K_ff @ u_f - load_r
     result.equilibrium_residual = float(np.max(np.abs(res))) / F if res.size and F > 0 else 0.0
     _held_contacts(cts, gap, slip, r_n, r_t, held_n, held_t, tol, D)
@@ -1081,6 +1067,18 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
 
 
 # --------------------------------------------------------------------------- states
+
+def _response(model, cts, free, presc, u_f, u_p, r_n, r_t, b0):
+    """The full displacement, each contact's gap and slip, and the force and displacement
+    scales the classification tolerances are relative to."""
+    u = np.zeros(model.n_dofs)
+    u[free] = u_f
+    u[presc] = u_p
+    F = max(float(np.max(np.abs(np.concatenate([r_n, r_t])))) if r_n.size else 0.0,
+            float(np.max(np.abs(b0))) if b0.size else 0.0)
+    D = float(np.max(np.abs(u))) if u.size else 0.0
+    return u, cts.A_n @ u, cts.A_t @ u, F, D
+
 
 def _held_contacts(cts, gap, slip, r_n, r_t, held_n, held_t, tol, D) -> None:
     """Contacts the Dirichlet boundary holds: a prescribed penetration is an error; on a

@@ -170,7 +170,7 @@ def _violations(problem, S, removed, lam, xi, scales):
     """Orient ξ (eᵀξ_S > 0) and list the sign violations in S and dual violations off S."""
     if (S.size and xi[S].sum() < 0) or (S.size == 0 and xi[np.argmax(np.abs(xi))] < 0):
         xi = -xi
-    w = lam * _matvec(problem, "B", xi) - _matvec(problem, "A", xi)
+    w = problem.residual_vector(lam, xi)
     scale_x = np.abs(xi).max()
     s = scales[0] + abs(lam) * scales[1]
     leave = S[xi[S] < -1e-9 * scale_x] if S.size else S
@@ -192,12 +192,3 @@ def _single_move(S, xS, w, out, leave, enter, visited):
         if S_next.tobytes() not in visited:
             return S_next
     return None
-
-
-def _matvec(problem: EiCPProblem, which: str, x: np.ndarray) -> np.ndarray:
-    M = problem.A if which == "A" else problem.B
-    if problem.distributed:
-        from ..petsc.lcp import matvec
-
-        return matvec(M, x)
-    return M @ x

@@ -22,9 +22,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..core.errors import ProblemError
+from ..core.operators import is_petsc_mat, matvec, max_abs_entry, to_dense
 from ..core.results import Result
 from ..core.validation import as_index_set, as_matrix
 
@@ -44,8 +44,8 @@ class EiCPProblem:
 
     @classmethod
     def from_data(cls, A, B, J=None) -> "EiCPProblem":
-        if _is_petsc_mat(A) or _is_petsc_mat(B):
-            if not (_is_petsc_mat(A) and _is_petsc_mat(B)):
+        if is_petsc_mat(A) or is_petsc_mat(B):
+            if not (is_petsc_mat(A) and is_petsc_mat(B)):
                 raise ProblemError("A and B must both be PETSc Mats or both NumPy/SciPy")
             n = A.getSize()[0]
             if A.getSize() != (n, n) or B.getSize() != (n, n):
@@ -63,7 +63,7 @@ class EiCPProblem:
 
     @property
     def distributed(self) -> bool:
-        return _is_petsc_mat(self.A)
+        return is_petsc_mat(self.A)
 
     @property
     def F(self) -> np.ndarray:
@@ -74,39 +74,14 @@ class EiCPProblem:
 
     def scales(self) -> tuple[float, float]:
         """``(max|A|, max|B|)``."""
-        return _max_abs(self.A), _max_abs(self.B)
+        return max_abs_entry(self.A), max_abs_entry(self.B)
 
     def dense(self) -> tuple[np.ndarray, np.ndarray]:
-        return _dense(self.A), _dense(self.B)
+        return to_dense(self.A), to_dense(self.B)
 
     def residual_vector(self, lam: float, x: np.ndarray) -> np.ndarray:
         """``w = (λB − A)x`` (gathered on every rank when distributed)."""
-        if self.distributed:
-            from ..petsc.lcp import matvec
-
-            return lam * matvec(self.B, x) - matvec(self.A, x)
-        return lam * (self.B @ x) - self.A @ x
-
-
-def _is_petsc_mat(M) -> bool:
-    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
-
-
-def _max_abs(M) -> float:
-    if _is_petsc_mat(M):
-        from ..petsc.lcp import max_abs_entry
-
-        return max_abs_entry(M)
-    data = M.data if sp.issparse(M) else np.asarray(M)
-    return float(np.max(np.abs(data))) if data.size else 0.0
-
-
-def _dense(M) -> np.ndarray:
-    if _is_petsc_mat(M):
-        from ..petsc.mat import mat_to_scipy
-
-        return mat_to_scipy(M).toarray()
-    return M.toarray() if sp.issparse(M) else np.asarray(M)
+        return lam * matvec(self.B, x) - matvec(self.A, x)
 
 
 @dataclass

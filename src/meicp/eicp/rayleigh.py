@@ -40,6 +40,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 
 from ..core.errors import ProblemError
+from ..core.operators import to_dense
 from ..core.validation import check_spd, check_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_pair
 
@@ -380,7 +381,7 @@ class _Polisher:
         x_R = x[R]
         r = float(x @ (self.A @ x)) / float(x @ (self.B @ x))
         if R.size <= DENSE_POLISH_LIMIT:
-            lams, vecs = la.eigh(_dense(A_RR), _dense(B_RR))
+            lams, vecs = la.eigh(to_dense(A_RR), to_dense(B_RR))
         else:
             from scipy.sparse.linalg import eigsh
 
@@ -411,10 +412,6 @@ def _submatrix(M, idx):
     if sp.issparse(M):
         return M[idx][:, idx]
     return M[np.ix_(idx, idx)]
-
-
-def _dense(M):
-    return M.toarray() if sp.issparse(M) else M
 
 
 def _add_distinct(found: list, new, scales, lam_rtol: float = 1e-9, x_atol: float = 1e-7) -> None:

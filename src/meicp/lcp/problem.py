@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.operators import is_petsc_mat, matvec, max_abs_entry, to_dense
 from ..core.results import SOLVED, Result
 from ..core.validation import as_matrix, as_vector
 
@@ -35,7 +36,7 @@ class LCPProblem:
     @classmethod
     def from_data(cls, M, q) -> "LCPProblem":
         """Validate ``M`` (ndarray, SciPy sparse or PETSc Mat) and ``q`` (NumPy, full length)."""
-        if _is_petsc_mat(M):
+        if is_petsc_mat(M):
             from ..petsc.lcp import check_petsc_matrix
 
             check_petsc_matrix(M)
@@ -46,14 +47,10 @@ class LCPProblem:
     @property
     def distributed(self) -> bool:
         """True for a PETSc Mat: products and scales are then collective."""
-        return _is_petsc_mat(self.M)
+        return is_petsc_mat(self.M)
 
     def matvec(self, x: np.ndarray) -> np.ndarray:
-        if self.distributed:
-            from ..petsc.lcp import matvec
-
-            return matvec(self.M, x)
-        return self.M @ x
+        return matvec(self.M, x)
 
     @property
     def n(self) -> int:
@@ -65,31 +62,10 @@ class LCPProblem:
 
     @property
     def matrix_scale(self) -> float:
-        if self.distributed:
-            from ..petsc.lcp import max_abs_entry
-
-            return max_abs_entry(self.M)
-        data = self.M.data if self.sparse else self.M
-        return float(np.max(np.abs(data))) if data.size else 0.0
+        return max_abs_entry(self.M)
 
     def dense(self) -> np.ndarray:
-        if self.distributed:
-            from ..petsc.mat import mat_to_scipy
-
-            return mat_to_scipy(self.M).toarray()
-        return self.M.toarray() if self.sparse else self.M
-
-    def scipy(self):
-        """M as a SciPy CSR or ndarray (gathered on every rank when distributed)."""
-        if self.distributed:
-            from ..petsc.mat import mat_to_scipy
-
-            return mat_to_scipy(self.M)
-        return self.M
-
-
-def _is_petsc_mat(M) -> bool:
-    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
+        return to_dense(self.M)
 
 
 @dataclass
