@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 MPIRUN := mpirun -n 2 --oversubscribe
 PYTEST_MPI := $(MPIRUN) $(PY) -m mpi4py -m pytest --with-mpi --timeout=120 --timeout-method=thread -p no:cacheprovider --color=no
 
-.PHONY: setup demo test test-serial test-mpi clean
+.PHONY: setup demo test test-serial test-mpi bench clean
 
 setup:
 	@bash scripts/setup.sh
@@ -29,6 +29,12 @@ test-serial:
 
 test-mpi:
 	timeout 600 $(PYTEST_MPI) -q -m mpi tests
+
+# benchmarks are not tests: `make bench` (quick, < 10 min, into build/benchmarks/) or
+# `make bench MODE=full` (the committed figures of docs/benchmarks.md, into docs/benchmarks/)
+MODE ?= quick
+bench: setup
+	@bash scripts/bench.sh $(MODE)
 
 clean:
 	rm -rf .venv build src/*.egg-info .pytest_cache

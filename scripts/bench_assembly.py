@@ -39,7 +39,7 @@ import bench_csv  # noqa: E402
 from meicp.io.scene import scene_from_dict  # noqa: E402
 from meicp.lattice.assembly import assemble  # noqa: E402
 
-CSV = ROOT / "docs" / "benchmarks" / "assembly.csv"
+CSV = bench_csv.csv_path("assembly")
 FIELDS = ["problem", "method", "settings", "ranks", "dofs", "repeat", "wall_s", "rss_peak_mb",
           "rank_ratio", "ru_maxrss_mb", "tracemalloc_peak_mb", "nnz", "matrix_mb", "status"]
 TARGET_DOFS = (10_000, 30_000, 100_000, 300_000, 1_000_000)

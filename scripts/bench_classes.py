@@ -7,8 +7,7 @@ sufficient tests above the limit.  Medians of 5 runs after one warm-up.
 
 from __future__ import annotations
 
-import csv
-import os
+import argparse
 import statistics
 import sys
 import time
@@ -18,6 +17,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+import bench_csv  # noqa: E402
 
 from meicp.lcp.classes import CLASS_NAMES, classify  # noqa: E402
 
@@ -31,10 +33,13 @@ FAMILIES = {
 
 
 def main():
-    out = ROOT / "docs" / "benchmarks" / "classes.csv"
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sizes", nargs="+", type=int, default=list(range(2, 13)) + [20, 100, 1000])
+    args = p.parse_args()
+    out = bench_csv.csv_path("classes")
     rng = np.random.default_rng(0)
     rows = []
-    for n in list(range(2, 13)) + [20, 100, 1000]:
+    for n in args.sizes:
         for family, make in FAMILIES.items():
             M = make(n, rng)
             classify(M)
@@ -47,12 +52,7 @@ def main():
             rows.append(dict(n=n, family=family, exact=n <= 12, median_s=f"{statistics.median(times):.4g}",
                              max_s=f"{max(times):.4g}", undecided=undecided))
             print(rows[-1], flush=True)
-    tmp = out.with_name(out.name + ".part")
-    with tmp.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    os.replace(tmp, out)
+    bench_csv.write_rows(out, rows, list(rows[0]), keep=lambda r: False)
     print(f"wrote {out}")
 
 

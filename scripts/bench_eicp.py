@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "scripts"))
 
 import bench_csv  # noqa: E402
-OUT = ROOT / "docs" / "benchmarks" / "eicp.csv"
+OUT = bench_csv.csv_path("eicp")
 FIELDS = ["experiment", "problem", "n", "J", "method", "settings", "ranks", "wall_s", "iterations",
           "status", "solutions", "residual", "error", "peak_rss_mb"]
 

@@ -189,7 +189,7 @@ def distributed_runs(args, comm):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks" / "lcp.csv"))
+    p.add_argument("--out", default=str(bench_csv.csv_path("lcp")))
     p.add_argument("--append", action="store_true")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--families", nargs="+", default=["siconos", "condensed", "laplacian", "lattice"])
