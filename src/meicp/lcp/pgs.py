@@ -75,6 +75,9 @@ def pgs(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 100000
     t1 = time.perf_counter()
     x = np.zeros(problem.n) if x0 is None else np.maximum(np.asarray(x0, float), 0.0)
     scale_w = max(float(np.abs(q).max()), 1e-300)
+    # stop a hundredfold below tol, but never below rounding (tol = 1e-14 would otherwise
+    # sweep to max_iter); the polish on the support and the certificate do the rest
+    stop = max(tol * 1e-2, 100 * np.finfo(float).eps)
     result = LCPResult(method="pgs")
     status = "max_iterations"
     sweep = 0
@@ -83,7 +86,7 @@ def pgs(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 100000
             x[idx] = np.maximum(0.0, x[idx] - omega * (rows @ x + q[idx]) / diag)
         if sweep % check_every == 0:
             natural = np.abs(np.minimum(x, M @ x + q)).max()
-            if natural <= tol * max(scale_w, problem.matrix_scale * np.abs(x).max()) * 1e-2:
+            if natural <= stop * max(scale_w, problem.matrix_scale * np.abs(x).max()):
                 status = "solved"
                 break
     result.iterations = sweep
