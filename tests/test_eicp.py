@@ -193,3 +193,13 @@ def test_cli_eicp(tmp_path):
     write_hdf5_problem(tmp_path / "bad.h5", A=np.eye(2))
     out = run(meicp_cmd() + ["eicp", str(tmp_path / "bad.h5")])
     assert out.returncode == 2 and "no dataset 'B'" in out.stderr
+
+
+def test_tol_out_of_range_is_refused_and_a_loose_one_warned(caplog):
+    A, B = np.diag([1.0, 2.0]), np.eye(2)
+    for bad in (0.0, -1e-8, 1.0, float("nan")):
+        with pytest.raises(meicp.ProblemError, match="tol must lie in"):
+            meicp.solve_eicp(A, B, tol=bad)
+    with caplog.at_level("WARNING", logger="meicp"):
+        r = meicp.solve_eicp(A, B, tol=1e-3)
+    assert r.success and "does not pin" in caplog.text
