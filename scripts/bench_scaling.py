@@ -1,0 +1,514 @@
+#!/usr/bin/env python3
+"""Scaling benchmark (issue 7 §3): a two-layer lattice instability problem from 10^4 to 10^6
+DOFs, on 1 and on 2 ranks, time and peak memory per stage, with the peers in the same run.
+
+Commands that produce the committed ``docs/benchmarks/scaling.csv`` (``scripts/bench.sh full``)::
+
+    export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
+    .venv/bin/python scripts/bench_scaling.py                       # 1 rank + every peer
+    mpirun -n 2 --oversubscribe .venv/bin/python scripts/bench_scaling.py   # 2 ranks (appends)
+    .venv/bin/python scripts/charts.py scaling docs/benchmarks/scaling.csv
+    # quick mode (build/benchmarks/): the same with --quick (10^4 and 3·10^4 DOFs only)
+
+Problem ("lattice family"): nx × ny nodes with nx = 2·ny (10^6 DOFs: 1000 × 500, the lattice
+of ``data/scenes/extensive_contact.toml``), a soft layer (k = 1, ρ = 1) under a stiff one
+(k = 5, ρ = 2), top row fixed, every base node in contact with the rigid rough base and
+sliding in +x (``states = "slip+"``) at μ = 2: an MEiCP with |J| = nx complementarity pairs
+and a nonsymmetric pencil (friction), which has a certified divergence mode at every size
+measured (σ > 0).
+
+Stages (``stage`` column), each timed barrier to barrier (max over ranks), with the peak
+resident set of the stage (``/proc/self/status`` VmHWM, reset through ``clear_refs`` before
+the stage; largest over ranks in ``peak_rss_mb``, summed over ranks in ``total_rss_mb``):
+
+- ``assemble``: K and M (SciPy on 1 rank as ``analyze`` does, PETSc MPIAIJ on 2);
+- ``pencil``: the contact maps and the reduced pencil ``A = −PKQ``, ``B = PMQ``;
+- ``eigensolve``: one SLEPc Krylov–Schur shift-and-invert solve (MUMPS LU) of the full
+  pencil, ``nev`` eigenvalues nearest the target 0 (in modulus), tol 1e-10;
+- ``meicp``: ``solve_eicp(A, B, J, method="active-set", lam_min=0)`` — iterations (support
+  updates) and eigen-solves from ``result.coverage``;
+- ``analyze``: ``meicp.analyze(scene, comm, method="active-set")`` end to end (its own
+  ``timings`` in ``detail``).
+
+``cpu_frac``: CPU time of the stage / its wall time, smallest over ranks (below 1: the rank
+was descheduled — the machine is shared); ``load1``: the 1-minute load average at its start.
+
+``above_base_mb``: ``peak_rss_mb`` minus the resident set of the process after importing
+meicp, PETSc and SLEPc (about 100 MB), i.e. what the problem itself uses.
+
+Peers (1 rank only, on the same pencil or LCP, in the same process and run):
+
+- ``eigensolve`` by SciPy ARPACK + SuperLU (``scipy.sparse.linalg.eigs`` with ``sigma=0``,
+  same nev, tol 1e-10): eigenvalue agreement with SLEPc's in ``error``; skipped with status
+  ``not run: time limit`` when its time predicted from the previous size (∝ n^1.5) exceeds
+  ``--peer-limit`` seconds;
+- ``meicp`` by dense enumeration (``method="enumerate"``): the main sizes are far beyond it
+  (``not run: too large``); it runs on tiny lattices of the same family (nx = 6..12,
+  2^nx supports), next to the active-set on the same pencil (λ agreement in ``error``);
+- ``lcp``: the static frictional contact LCP of the same lattice under a top-row load
+  (``states = "solve"``, condensed dense formulation), solved by meicp's Lemke and by
+  Siconos' Lemke on the same (M, q); the condensation itself is the ``static`` stage.
+  Above ``--lcp-max-dofs`` the condensed LCP is ``not run: too large``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+import bench_csv  # noqa: E402
+
+FIELDS = ["problem", "stage", "method", "settings", "ranks", "dofs", "nx", "ny", "J", "n", "repeats",
+          "wall_s", "wall_min_s", "wall_max_s", "iterations", "eigen_solves", "status", "error",
+          "peak_rss_mb", "total_rss_mb", "above_base_mb", "cpu_frac", "load1", "lam", "residual", "detail"]
+FULL_DOFS = (10_000, 30_000, 100_000, 300_000, 1_000_000)
+QUICK_DOFS = (10_000, 30_000)
+MU = 2.0
+
+
+# ----------------------------------------------------------------------------- memory
+
+def _status_kb(key: str) -> float:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(key):
+                return float(line.split()[1])
+    return float("nan")
+
+
+def release_memory() -> None:
+    gc.collect()
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+
+
+class Stage:
+    """Wall time (barrier to barrier, max over ranks) and peak RSS (VmHWM after a reset)."""
+
+    def __init__(self, comm):
+        self.comm = comm
+
+    def __enter__(self):
+        release_memory()
+        try:
+            with open("/proc/self/clear_refs", "w") as f:
+                f.write("5")  # resets VmHWM to the current RSS (Linux ≥ 4.0)
+        except OSError:
+            pass
+        self.comm.Barrier()
+        self.load1 = os.getloadavg()[0]
+        self.c0 = time.process_time()
+        self.t0 = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc):
+        from mpi4py import MPI
+
+        if exc[0] is None:
+            self.comm.Barrier()
+        mine = time.perf_counter() - self.t0
+        cpu = (time.process_time() - self.c0) / max(mine, 1e-9)
+        peak = _status_kb("VmHWM") / 1024.0
+        if exc[0] is None:
+            self.wall = self.comm.allreduce(mine, op=MPI.MAX)
+            self.cpu_frac = self.comm.allreduce(cpu, op=MPI.MIN)
+            self.peak = self.comm.allreduce(peak, op=MPI.MAX)
+            self.total = self.comm.allreduce(peak, op=MPI.SUM)
+        return False
+
+
+# ----------------------------------------------------------------------------- problem
+
+def lattice_shape(dofs: int) -> tuple[int, int]:
+    if dofs == 1_000_000:
+        return 1000, 500
+    ny = max(2, 2 * round(math.sqrt(dofs / 4) / 2))
+    return 2 * ny, ny
+
+
+def make_scene(nx: int, ny: int, *, states="slip+", load=None):
+    from meicp.io.scene import scene_from_dict
+
+    d = {"lattice": {"nx": nx, "spacing": 1.0},
+         "layers": [{"name": "A", "rows": max(1, ny // 2), "stiffness": 1.0, "density": 1.0},
+                    {"name": "B", "rows": ny - max(1, ny // 2), "stiffness": 5.0, "density": 2.0}],
+         "boundary": {"top": "fixed", "bottom": "contact"},
+         "contact": {"friction": MU, "states": states},
+         "solver": {"method": "active-set", "nev": 4}}
+    if load is not None:
+        d["load"] = {"top_displacement": load}
+    return scene_from_dict(d)
+
+
+def build_pencil(model, scene, K, M, comm):
+    """(A, B, J) as analyze builds them: SciPy on 1 rank, PETSc products on several."""
+    from meicp.contact.instability import _distributed_pencil
+    from meicp.contact.maps import contact_sets, grazing_cases, reduced_system
+
+    sets = contact_sets(scene, model)
+    red = reduced_system(model, sets, next(iter(grazing_cases(sets))))
+    if comm.size > 1:
+        A, B = _distributed_pencil(K, M, red, comm)
+    else:
+        A, B = -(red.P @ K @ red.Q).tocsr(), (red.P @ M @ red.Q).tocsr()
+    return A, B, red.J
+
+
+def slepc_eigs(A, B, nev, comm):
+    """One shift-and-invert Krylov–Schur solve (MUMPS), nev nearest 0 in modulus."""
+    from meicp.petsc import import_slepc
+    from meicp.petsc.options import OptionsScope
+
+    SLEPc = import_slepc()
+    opts = {"eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True, "eps_tol": 1e-10,
+            "eps_gen_non_hermitian": True, "st_type": "sinvert", "st_ksp_type": "preonly",
+            "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps"}
+    eps = SLEPc.EPS().create(comm=A.getComm())
+    try:
+        eps.setOperators(A, B)
+        with OptionsScope("bench_scaling_", opts):
+            eps.setOptionsPrefix("bench_scaling_")
+            eps.setFromOptions()
+            eps.solve()
+        nconv = eps.getConverged()
+        vals = np.array([eps.getEigenvalue(i) for i in range(min(nconv, nev))], dtype=complex)
+        its = eps.getIterationNumber()
+    finally:
+        eps.destroy()
+    return vals, its
+
+
+def match_error(ref: np.ndarray, vals: np.ndarray) -> float:
+    """max over ref of min |ref − val| / |ref| (the eigenvalues of one solver found by the other)."""
+    if ref.size == 0 or vals.size == 0:
+        return float("nan")
+    return float(max(np.min(np.abs(vals - r)) / max(abs(r), 1e-300) for r in ref))
+
+
+def fmt_vals(vals) -> str:
+    return " ".join(f"{v.real:.10g}" + (f"{v.imag:+.3g}j" if abs(v.imag) > 0 else "") for v in vals)
+
+
+# ----------------------------------------------------------------------------- runs
+
+class Runner:
+    def __init__(self, args, comm):
+        self.args, self.comm = args, comm
+        self.rows: list = []
+        self.arpack_last = None  # (n, seconds) of the last ARPACK run, for the prediction
+        import meicp.petsc  # noqa: F401  (the libraries in RSS before the baseline)
+        from meicp.petsc import import_slepc
+
+        import_slepc()
+        release_memory()
+        self.base_mb = comm.allreduce(_status_kb("VmRSS") / 1024.0, op=__import__("mpi4py.MPI").MPI.MAX)
+
+    def say(self, msg):
+        if self.comm.rank == 0:
+            print(msg, flush=True)
+
+    def row(self, **kw):
+        base = {k: "" for k in FIELDS}
+        base.update(ranks=self.comm.size)
+        base.update(kw)
+        if isinstance(base["cpu_frac"], float):
+            base["cpu_frac"] = f"{base['cpu_frac']:.2f}"
+        if isinstance(base["load1"], float):
+            base["load1"] = f"{base['load1']:.2f}"
+        if isinstance(base["peak_rss_mb"], float):
+            base["above_base_mb"] = base["peak_rss_mb"] - self.base_mb
+        for k in ("wall_s", "wall_min_s", "wall_max_s", "peak_rss_mb", "total_rss_mb", "above_base_mb"):
+            if isinstance(base[k], float):
+                base[k] = f"{base[k]:.4g}" if k.startswith("wall") else f"{base[k]:.0f}"
+        for k in ("error", "residual"):
+            if isinstance(base[k], float):
+                base[k] = f"{base[k]:.3g}"
+        self.rows.append(base)
+        w = base["wall_s"]
+        self.say(f"  {base['stage']:<10} {base['method']:<26} {base['status']:<22} {w:>9} s  "
+                 f"peak {base['peak_rss_mb']:>6} MB/rank  {base['detail'][:90]}")
+
+    def timed(self, n_rep, fn):
+        """Run fn() n_rep times inside Stage; return (last value, walls, peak, total)."""
+        walls, peaks, totals, out = [], [], [], None
+        self.cpu, self.load = [], []
+        for rep in range(n_rep):
+            out = None
+            gc.collect()
+            with Stage(self.comm) as st:
+                out = fn()
+            walls.append(st.wall)
+            peaks.append(st.peak)
+            totals.append(st.total)
+            self.cpu.append(st.cpu_frac)
+            self.load.append(st.load1)
+            if rep < n_rep - 1:
+                _cleanup(out)
+        return out, walls, max(peaks), max(totals)
+
+    # -- the main lattice family --------------------------------------------------------
+    def lattice(self, dofs):
+        import meicp
+        from meicp.eicp.solve import solve_eicp
+        from meicp.lattice.model import LatticeModel
+
+        comm, args = self.comm, self.args
+        nx, ny = lattice_shape(dofs)
+        scene = make_scene(nx, ny)
+        model = LatticeModel(scene)
+        n_dofs = model.n_dofs
+        reps = args.repeats if n_dofs <= args.repeat_max_dofs else 1
+        prob = f"lattice_{nx}x{ny}"
+        common = dict(problem=prob, dofs=n_dofs, nx=nx, ny=ny, J=nx, repeats=reps)
+        self.say(f"\n{prob}: {n_dofs} DOFs, {comm.size} rank(s), {reps} repeat(s)")
+        mode = "petsc" if comm.size > 1 else "scipy"
+
+        def stat(walls):
+            return dict(wall_s=statistics.median(walls), wall_min_s=min(walls), wall_max_s=max(walls),
+                        cpu_frac=min(self.cpu), load1=max(self.load))
+
+        # assemble
+        (K, M), walls, peak, total = self.timed(reps, lambda: meicp.assemble(model, comm if comm.size > 1 else None))
+        self.row(**common, stage="assemble", method=f"meicp-{mode}", settings="K and M", status="ok",
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        # pencil
+        (A, B, J), walls, peak, total = self.timed(reps, lambda: build_pencil(model, scene, K, M, comm))
+        n = A.getSize()[0] if hasattr(A, "getSize") else A.shape[0]
+        common["n"] = n
+        self.row(**common, stage="pencil", method=f"meicp-{mode}", settings="contact maps, A=-PKQ, B=PMQ",
+                 status="ok", peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        # eigensolve: SLEPc + MUMPS on PETSc matrices (conversion from SciPy untimed on 1 rank)
+        if hasattr(A, "getSize"):
+            Ap, Bp = A, B
+        else:
+            from meicp.petsc.mat import mat_from_scipy
+
+            Ap, Bp = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
+        (vals, its), walls, peak, total = self.timed(reps, lambda: slepc_eigs(Ap, Bp, args.nev, comm))
+        slepc_vals, slepc_wall = vals, statistics.median(walls)
+        self.row(**common, stage="eigensolve", method="slepc-krylovschur+mumps", iterations=its,
+                 eigen_solves=1, settings=f"sinvert target=0 (magnitude) nev={args.nev} tol=1e-10",
+                 status="solved" if vals.size >= args.nev else "not_converged", lam=fmt_vals(vals),
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        if Ap is not A:
+            Ap.destroy()
+            Bp.destroy()
+        # the MEiCP by the active-set search
+        r, walls, peak, total = self.timed(reps, lambda: solve_eicp(
+            A, B, J=J, method="active-set", lam_min=0.0, target=0.0, nev=args.nev, tol=1e-10))
+        sol = r.solutions[0] if r.solutions else None
+        cov = r.coverage
+        self.row(**common, stage="meicp", method="active-set", settings=f"lam_min=0 target=0 nev={args.nev}",
+                 iterations=r.iterations, eigen_solves=cov.get("eigen_solves", ""), status=r.status,
+                 lam=f"{sol.lam:.10g}" if sol else "", residual=sol.residual if sol else "",
+                 detail=f"supports visited {cov.get('supports_visited')}; EPS iterations {cov.get('eps_iterations')}",
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        as_lam = sol.lam if sol else None
+        # enumeration cannot: say why
+        if comm.size == 1:
+            self.row(**common, stage="meicp", method="enumerate", status="not run: too large",
+                     detail=f"2^{nx} supports and |F| = {n - nx} > 2000 (dense pencils); runs on nx ≤ 12 only")
+        # peer: ARPACK + SuperLU on the same pencil
+        if comm.size == 1:
+            self.arpack(common, A, B, slepc_vals, slepc_wall)
+        if hasattr(A, "destroy"):
+            A.destroy()
+            B.destroy()
+        if hasattr(K, "destroy"):
+            K.destroy()
+            M.destroy()
+        del A, B, K, M
+        release_memory()
+        # analyze end to end
+        res, walls, peak, total = self.timed(reps, lambda: meicp.analyze(scene, comm if comm.size > 1 else None,
+                                                                         method="active-set"))
+        e = res.eicp if not isinstance(res.eicp, list) else res.eicp[0]
+        sigma = res.modes[0].sigma if res.modes else None
+        agree = ""
+        if sigma is not None and as_lam is not None:
+            agree = abs(sigma - as_lam) / abs(as_lam)
+        self.row(**common, stage="analyze", method="meicp-analyze", settings="method=active-set, whole pipeline",
+                 iterations=e.iterations if e else "", eigen_solves=e.coverage.get("eigen_solves", "") if e else "",
+                 status=f"{res.status} ({'unstable' if res.stable is False else res.stable})",
+                 lam=f"{sigma:.10g}" if sigma is not None else "", residual=res.modes[0].residual if res.modes else "",
+                 error=agree, detail=json.dumps({k: round(v, 3) for k, v in res.timings.items()}),
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        del res, e
+        release_memory()
+        # peer: the static contact LCP, meicp vs Siconos (serial)
+        if comm.size == 1:
+            self.lcp(nx, ny)
+
+    def arpack(self, common, A, B, slepc_vals, slepc_wall):
+        import scipy.sparse.linalg as spla
+
+        n, args = common["n"], self.args
+        settings = f"scipy eigs sigma=0 which=LM k={args.nev} tol=1e-10 (SuperLU)"
+        if self.arpack_last is not None:
+            n0, t0 = self.arpack_last
+            pred = t0 * (n / n0) ** 1.5
+            if pred > args.peer_limit:
+                self.row(**common, stage="eigensolve", method="arpack+superlu", settings=settings,
+                         status="not run: time limit",
+                         detail=f"predicted {pred:.0f} s (∝ n^1.5 from {t0:.1f} s at n={n0}) > {args.peer_limit:.0f} s")
+                return
+        Ac, Bc = A.tocsc(), B.tocsc()
+        walls, vals, peak, cpu, load = [], None, 0.0, [], []
+        reps = common["repeats"]
+        for _ in range(reps):
+            with Stage(self.comm) as st:
+                vals, vecs = spla.eigs(Ac, k=args.nev, M=Bc, sigma=0.0, which="LM", tol=1e-10)
+            walls.append(st.wall)
+            peak = max(peak, st.peak)
+            cpu.append(st.cpu_frac)
+            load.append(st.load1)
+        t = statistics.median(walls)
+        self.arpack_last = (n, t)
+        res = max(np.linalg.norm(Ac @ vecs[:, i] - vals[i] * (Bc @ vecs[:, i]))
+                  / (abs(vals[i]) * np.linalg.norm(Bc @ vecs[:, i]) + spla.norm(Ac, 1) * np.linalg.norm(vecs[:, i]))
+                  for i in range(vals.size))
+        err = max(match_error(slepc_vals, vals), match_error(vals, slepc_vals))
+        self.row(**common, stage="eigensolve", method="arpack+superlu", settings=settings, eigen_solves=1,
+                 status="solved", lam=fmt_vals(vals), residual=float(res), error=err,
+                 detail=f"time / SLEPc time = {t / slepc_wall:.2f}; error = eigenvalue disagreement with SLEPc",
+                 wall_s=t, wall_min_s=min(walls), wall_max_s=max(walls), peak_rss_mb=peak, total_rss_mb=peak,
+                 cpu_frac=min(cpu), load1=max(load))
+
+    def lcp(self, nx, ny):
+        import meicp
+        from meicp.contact.static import static_equilibrium
+        from meicp.lcp.siconos import siconos_solve
+
+        args = self.args
+        dofs = 2 * nx * ny
+        common = dict(problem=f"lattice_{nx}x{ny}", dofs=dofs, nx=nx, ny=ny, J=nx, repeats=1)
+        settings = f"static frictional LCP, condensed dense, {nx} contacts, mu={MU}"
+        if dofs > args.lcp_max_dofs:
+            for stage, method in (("static", "meicp-condensed"), ("lcp", "meicp-lemke"), ("lcp", "siconos-lemke")):
+                self.row(**common, stage=stage, method=method, settings=settings, status="not run: too large",
+                         detail=f"condensing {nx} contacts needs {2 * nx} sparse solves of {dofs} DOFs and a "
+                                f"dense {4 * nx}² LCP; limit --lcp-max-dofs {args.lcp_max_dofs}")
+            return
+        scene = make_scene(nx, ny, states="solve", load=[0.2 * nx / 100, -0.02 * nx / 100])
+        with Stage(self.comm) as st:
+            s = static_equilibrium(scene, formulation="condensed", method="lemke")
+        M, q = s.lcp_matrix, s.lcp_q
+        counts = {k: s.states.count(k) for k in set(s.states)}
+        self.row(**common, stage="static", method="meicp-condensed", settings=settings, n=M.shape[0],
+                 status=s.status, residual=s.residual, wall_s=st.wall, cpu_frac=st.cpu_frac, load1=st.load1,
+                 peak_rss_mb=st.peak, total_rss_mb=st.total,
+                 detail=json.dumps({"contact_states": counts, **{k: round(v, 3) for k, v in s.timings.items()}}))
+        ref = s.lcp.x
+        for method, fn in (("meicp-lemke", lambda: meicp.solve_lcp(M, q, method="lemke")),
+                           ("siconos-lemke", lambda: siconos_solve(M, q, "lemke"))):
+            with Stage(self.comm) as st:
+                r = fn()
+            dist = "no reference (the static solve's Lemke failed)"
+            if r.success and s.success:
+                d = float(np.abs(r.x - ref).max() / max(np.abs(ref).max(), 1e-300))
+                dist = (f"max|x − x_static| / max|x_static| = {d:.2g} (x_static: the static solve's own Lemke; "
+                        "the friction LCP need not have a unique solution — both are certified)")
+            self.row(**common, stage="lcp", method=method, settings=settings, n=M.shape[0],
+                     iterations=r.iterations, status=r.status, residual=r.residual, detail=dist,
+                     wall_s=st.wall, cpu_frac=st.cpu_frac, load1=st.load1, peak_rss_mb=st.peak,
+                     total_rss_mb=st.total)
+
+    # -- tiny lattices: enumeration next to the active-set -------------------------------
+    def tiny(self, nx):
+        from meicp.eicp.solve import solve_eicp
+        from meicp.lattice.assembly import assemble
+        from meicp.lattice.model import LatticeModel
+
+        comm = self.comm
+        ny = nx // 2
+        scene = make_scene(nx, ny)
+        model = LatticeModel(scene)
+        K, M = assemble(model)
+        A, B, J = build_pencil(model, scene, K, M, _Serial())
+        Ad, Bd = A.toarray(), B.toarray()
+        common = dict(problem=f"lattice_{nx}x{ny}", dofs=model.n_dofs, nx=nx, ny=ny, J=J.size, n=A.shape[0],
+                      repeats=1)
+        self.say(f"\nlattice_{nx}x{ny} (tiny): {model.n_dofs} DOFs, |J| = {J.size}, {comm.size} rank(s)")
+        with Stage(comm) as st:
+            r = solve_eicp(Ad, Bd, J=J, method="enumerate", lam_min=0.0, tol=1e-10,
+                           comm=comm if comm.size > 1 else None)
+        lams = np.array([s.lam for s in r.solutions])
+        self.row(**common, stage="meicp", method="enumerate", settings=f"all 2^{J.size} supports, lam_min=0",
+                 iterations=r.iterations, eigen_solves=r.coverage.get("eigen_solves"), status=r.status,
+                 lam=" ".join(f"{v:.10g}" for v in lams[:4]),
+                 residual=max((s.residual for s in r.solutions), default=float("nan")),
+                 detail=f"{lams.size} solution(s) with σ ≥ 0", wall_s=st.wall, cpu_frac=st.cpu_frac,
+                 load1=st.load1, peak_rss_mb=st.peak, total_rss_mb=st.total)
+        if comm.size == 1:
+            with Stage(comm) as st:
+                ra = solve_eicp(A, B, J=J, method="active-set", lam_min=0.0, target=0.0, nev=self.args.nev,
+                                tol=1e-10)
+            sol = ra.solutions[0] if ra.solutions else None
+            err = float(np.min(np.abs(lams - sol.lam)) / abs(sol.lam)) if sol is not None and lams.size else ""
+            self.row(**common, stage="meicp", method="active-set", settings=f"lam_min=0 target=0 nev={self.args.nev}",
+                     iterations=ra.iterations, eigen_solves=ra.coverage.get("eigen_solves"), status=ra.status,
+                     lam=f"{sol.lam:.10g}" if sol else "", residual=sol.residual if sol else "", error=err,
+                     detail="error = distance of λ to the nearest enumerated solution, relative",
+                     wall_s=st.wall, cpu_frac=st.cpu_frac, load1=st.load1, peak_rss_mb=st.peak,
+                     total_rss_mb=st.total)
+
+
+class _Serial:
+    size, rank = 1, 0
+
+
+def _cleanup(out):
+    items = out if isinstance(out, tuple) else (out,)
+    for x in items:
+        if hasattr(x, "destroy"):
+            x.destroy()
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--quick", action="store_true", help="10^4 and 3·10^4 DOFs, tiny nx 6 8 (about 1.5 min with the 2-rank run)")
+    p.add_argument("--dofs", nargs="+", type=int, help=f"lattice sizes (default {FULL_DOFS})")
+    p.add_argument("--tiny", nargs="*", type=int, help="nx of the tiny lattices for enumeration (default 6 8 10 12)")
+    p.add_argument("--nev", type=int, default=4)
+    p.add_argument("--repeats", type=int, default=3, help="repeats (median) up to --repeat-max-dofs")
+    p.add_argument("--repeat-max-dofs", type=int, default=100_000)
+    p.add_argument("--peer-limit", type=float, default=180.0, help="skip ARPACK above this predicted time [s]")
+    p.add_argument("--lcp-max-dofs", type=int, default=100_000, help="largest lattice for the condensed LCP peer")
+    args = p.parse_args()
+    dofs = args.dofs or (QUICK_DOFS if args.quick else FULL_DOFS)
+    tiny = args.tiny if args.tiny is not None else ([6, 8] if args.quick else [6, 8, 10, 12])
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    run = Runner(args, comm)
+    t0 = time.perf_counter()
+    for nx in tiny:
+        run.tiny(nx)
+    for d in dofs:
+        run.lattice(d)
+    if comm.rank == 0:
+        out = bench_csv.csv_path("scaling")
+        mine = str(comm.size)
+        bench_csv.write_rows(out, run.rows, FIELDS, keep=lambda r: r["ranks"] != mine)
+        print(f"\nwrote {len(run.rows)} rows ({comm.size} rank(s)) to {out} in {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
