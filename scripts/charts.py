@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Charts from the benchmark CSVs (DESIGN §7).  One function per benchmark:
+"""Charts from the benchmark CSVs (DESIGN §7).  One function ``chart_NAME`` per benchmark
+``scripts/bench_NAME.py``; it reads ``NAME.csv`` and writes its PNGs beside it:
 
     .venv/bin/python scripts/charts.py lcp docs/benchmarks/lcp.csv
 """
@@ -172,7 +173,512 @@ def chart_eicp(path):
     print(f"wrote {out}.png")
 
 
-CHARTS = {"lcp": chart_lcp, "assembly": chart_assembly, "eicp": chart_eicp}
+# --- speed against accuracy (bench_tradeoff.py) ---
+
+def chart_tradeoff(path):
+    """Speed against accuracy (scripts/bench_tradeoff.py): per problem family (row) and size
+    (column) a log-log panel of wall time against error — LCP ‖x − x_ref‖∞/‖x_ref‖∞, EiCP
+    relative λ error — one colour and marker per method (its tolerance sweep joined by a thin
+    line), the Pareto front over the solved runs of all methods as a black step line, runs
+    that did not solve as hollow markers above the dashed line at the top edge (never dropped),
+    and certified "solutions" outside the enumerated set ringed in red (not on the front).  Writes tradeoff_lcp.png, tradeoff_eicp.png and, with the certificate
+    residual on the y axis, tradeoff_lcp_residual.png and tradeoff_eicp_residual.png."""
+    import numpy as np
+
+    rows = read(path)
+    out = Path(path).with_suffix("")
+    floor, fail_y, top = 1e-17, 10.0, 80.0
+    order = {"lcp": ["lemke", "enumerate", "pgs", "newton", "tao", "auto", "siconos-lemke", "siconos-enum",
+                     "siconos-newton-fb", "siconos-pgs"],
+             "eicp": ["enumerate", "active-set", "rayleigh", "semismooth", "semismooth-ssls"]}
+    titles = {"condensed": "dense contact-like SPD (condensed grid)", "lattice": "sparse SPD (lattice K, y DOFs)",
+              "laplacian": "sparse SPD (2-D Laplacian)", "random_sym": "random symmetric mixed",
+              "friction": "nonsymmetric friction MEiCP (slip+)"}
+    colours = dict(zip(order["lcp"], plt.get_cmap("tab10").colors))
+    eicp_colours = dict(zip(order["eicp"], ["C1", "C0", "C4", "C2", "C9"]))
+
+    def style(method, kind):
+        marker = "^" if method.startswith("siconos") else ("s" if method.endswith("ssls") else "o")
+        return (eicp_colours if kind == "eicp" else colours).get(method, "k"), marker
+
+    def value(r, col):
+        try:
+            v = float(r[col])
+        except (TypeError, ValueError):
+            return None
+        return max(v, floor) if np.isfinite(v) else None
+
+    for kind in ("lcp", "eicp"):
+        sel = [r for r in rows if r["kind"] == kind]
+        if not sel:
+            continue
+        families = [f for f in dict.fromkeys(r["family"] for r in sel)]
+        sizes = {f: sorted({(int(r["n"]), r["problem"]) for r in sel if r["family"] == f}) for f in families}
+        ncol = max(len(v) for v in sizes.values())
+        for ycol, ylabel, suffix in (("error", {"lcp": "‖x − x_ref‖∞ / ‖x_ref‖∞",
+                                               "eicp": "relative λ error (max over returned solutions)"}[kind], ""),
+                                     ("residual", "certificate residual", "_residual")):
+            fig, axes = plt.subplots(len(families), ncol, figsize=(4.3 * ncol, 3.9 * len(families) + 0.9),
+                                     squeeze=False)
+            seen = {}
+            for i, family in enumerate(families):
+                for j in range(ncol):
+                    ax = axes[i][j]
+                    if j >= len(sizes[family]):
+                        ax.axis("off")
+                        continue
+                    n, problem = sizes[family][j]
+                    pts = [r for r in sel if r["problem"] == problem and r["wall_s"]]
+                    front = []
+                    for method in order[kind] + sorted({r["method"] for r in pts} - set(order[kind])):
+                        mine = sorted((r for r in pts if r["method"] == method), key=lambda r: -float(r["tol"]))
+                        if not mine:
+                            continue
+                        colour, marker = style(method, kind)
+                        ok = [(float(r["wall_s"]), value(r, ycol)) for r in mine
+                              if r["status"] == "solved" and value(r, ycol) is not None]
+                        bad = [float(r["wall_s"]) for r in mine if r["status"] != "solved"]
+                        wrong = [(float(r["wall_s"]), value(r, ycol)) for r in mine
+                                 if r["status"] == "solved" and r.get("wrong") not in (None, "", "0")
+                                 and value(r, ycol) is not None]
+                        if ok:
+                            xs, ys = zip(*ok)
+                            h, = ax.plot(xs, ys, marker=marker, color=colour, ls="-", lw=0.7, ms=6, alpha=0.85)
+                            seen.setdefault(method, h)
+                            front += [(x, y) for (x, y), r in zip(ok, [r for r in mine if r["status"] == "solved"
+                                                                       and value(r, ycol) is not None])
+                                      if r.get("wrong") in (None, "", "0")]
+                        if bad:
+                            ax.scatter(bad, [fail_y] * len(bad), marker=marker, facecolors="none",
+                                       edgecolors=colour, linewidths=1.3, s=42, zorder=3)
+                            seen.setdefault(method, matplotlib.lines.Line2D([], [], marker=marker, color=colour,
+                                                                            lw=0.7, ms=6))
+                        if wrong:
+                            ax.scatter(*zip(*wrong), s=140, facecolors="none", edgecolors="red", linewidths=1.2,
+                                       zorder=4)
+                            seen.setdefault("certified, not in the enumerated set", ax.scatter(
+                                [], [], s=140, facecolors="none", edgecolors="red", linewidths=1.2))
+                    # Pareto front: non-dominated (time, error) points over all methods
+                    front.sort()
+                    pareto, best = [], np.inf
+                    for x, y in front:
+                        if y < best:
+                            pareto.append((x, y))
+                            best = y
+                    if pareto:
+                        xs, ys = zip(*pareto)
+                        xs, ys = list(xs), list(ys)
+                        xmax = max(float(r["wall_s"]) for r in pts) * 3
+                        h, = ax.step(xs + [xmax], ys + [ys[-1]], where="post", color="k", lw=1.6, alpha=0.8,
+                                     zorder=2)
+                        seen.setdefault("Pareto front (solved runs)", h)
+                    ax.axhline(3.0, color="0.6", lw=0.8, ls="--")
+                    ax.text(0.99, 2.2, "not solved ↑ (hollow)", transform=ax.get_yaxis_transform(), fontsize=7,
+                            ha="right", va="top", color="0.4")
+                    ax.axhspan(1e-18, 1e-16, color="0.92", zorder=0)
+                    ax.set(xscale="log", yscale="log", ylim=(3e-18, top))
+                    ax.grid(True, which="major", alpha=0.3)
+                    J = next(r["J"] for r in pts) if pts else ""
+                    extra = f", |J| = {J}" if kind == "eicp" else ""
+                    skipped = sorted({r["method"] for r in sel if r["problem"] == problem and not r["wall_s"]})
+                    ax.set_title(f"{titles.get(family, family)}\nn = {n}{extra}", fontsize=9)
+                    if skipped:
+                        ax.text(0.99, 0.02, "some tols not run: " + ", ".join(skipped), transform=ax.transAxes,
+                                fontsize=6.5, ha="right", va="bottom", color="0.35")
+                    if i == len(families) - 1 or j >= len(sizes[families[-1]]):
+                        ax.set_xlabel("wall time, median [s]")
+                    if j == 0:
+                        ax.set_ylabel(ylabel + (" (floor 1e-17)" if ycol == "error" else ""), fontsize=8)
+            what = {"lcp": "LCP: speed against accuracy", "eicp": "EiCP / MEiCP: speed against accuracy"}[kind]
+            fig.suptitle(f"{what} — each method's tolerance sweep 1e-2 … 1e-14; grey band: below 1e-16; "
+                         "1 rank, 2-core shared machine", fontsize=10)
+            fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=min(6, len(seen)), fontsize=8,
+                       frameon=False)
+            fig.tight_layout(rect=(0, 0.55 / (3.9 * len(families) + 0.9), 1, 0.97))
+            name = f"{out}_{kind}{suffix}.png"
+            fig.savefig(name, dpi=100)
+            plt.close(fig)
+            print(f"wrote {name}")
+
+
+# --- scaling with DOFs and ranks, peers in the same run (bench_scaling.py) ---
+
+def _scaling_slope(pts, min_x=9e4):
+    """Least-squares slope of log y against log x over the points with x ≥ min_x (all
+    points when fewer than two reach it); None with fewer than two points."""
+    import numpy as np
+
+    use = [p for p in pts if p[0] >= min_x]
+    if len(use) < 2:
+        use = pts
+    if len(use) < 2:
+        return None
+    x, y = np.log10([p[0] for p in use]), np.log10([p[1] for p in use])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def chart_scaling(path):
+    """Scaling (scripts/bench_scaling.py): time per stage against DOFs with the peers
+    (scaling_time.png), peak memory per rank (scaling_memory.png), speedup and parallel
+    efficiency 1 → 2 ranks (scaling_speedup.png); log-log slopes fitted from 10^5 DOFs up."""
+    rows = read(path)
+    out = Path(path).with_suffix("")
+    ok = [r for r in rows if r["wall_s"] and r["status"].split()[0] in ("ok", "solved")]
+    failed = [r for r in rows if r["wall_s"] and r not in ok]
+    series = defaultdict(list)  # (stage, method, ranks) -> [(dofs, wall, mem)]
+    for r in ok:
+        mem = float(r["above_base_mb"]) if r["above_base_mb"] else None
+        series[(r["stage"], r["method"], int(r["ranks"]))].append((int(r["dofs"]), float(r["wall_s"]), mem))
+    for v in series.values():
+        v.sort()
+    pipeline = [("assemble", "meicp-scipy", "assembly K, M (SciPy)"), ("assemble", "meicp-petsc", "assembly K, M (PETSc)"),
+                ("pencil", "meicp-scipy", "reduced pencil (SciPy)"), ("pencil", "meicp-petsc", "reduced pencil (PETSc)"),
+                ("eigensolve", "slepc-krylovschur+mumps", "one eigen-solve, SLEPc + MUMPS"),
+                ("meicp", "active-set", "MEiCP active-set (solve_eicp)"),
+                ("analyze", "meicp-analyze", "analyze, end to end")]
+    colour = {"assemble": "C0", "pencil": "C1", "eigensolve": "C2", "meicp": "C3", "analyze": "C4"}
+    main = 1e4 * 0.9  # the lattice family proper starts at 10^4 DOFs; tiny lattices below
+
+    def draw(ax, key, label, c, ls, marker, idx=1, min_x=9e4, lo=main):
+        pts = [(p[0], p[idx]) for p in series.get(key, []) if p[0] >= lo and p[idx]]
+        if not pts:
+            return
+        s = _scaling_slope(pts, min_x)
+        lab = label + (f" ({key[2]} rank{'s' if key[2] > 1 else ''})") + (f", slope {s:.2f}" if s is not None else "")
+        ax.loglog(*zip(*pts), ls=ls, marker=marker, color=c, label=lab, ms=5)
+
+    # 1. time
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(17, 8.5))
+    for stage, method, label in pipeline:
+        for ranks, ls, mk in ((1, "-", "o"), (2, "--", "s")):
+            draw(ax, (stage, method, ranks), label, colour[stage], ls, mk)
+    draw(ax, ("eigensolve", "arpack+superlu", 1), "peer: one eigen-solve, SciPy ARPACK + SuperLU", "k", ":", "D")
+    ax.set(xlabel="DOFs of the lattice", ylabel="wall time, median [s]",
+           title="two-layer lattice on a sliding base (μ = 2): time per stage\n"
+                 "solid 1 rank, dashed 2 ranks; slopes = log-log fit from 10^5 DOFs up")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
+    # peers of the MEiCP and the LCP
+    for ranks, ls, mk in ((1, "-", "o"), (2, "--", "s")):
+        draw(bx, ("meicp", "enumerate", ranks), "MEiCP dense enumeration (2^nx supports)", "C5", ls, mk,
+             min_x=0, lo=0)
+    draw(bx, ("meicp", "active-set", 1), "MEiCP active-set", "C3", "-", "o", lo=0)
+    draw(bx, ("static", "meicp-condensed", 1), "static LCP: condensation + Lemke + states (meicp)", "C6", "-", "^",
+         min_x=0)
+    draw(bx, ("lcp", "meicp-lemke", 1), "static LCP, Lemke: meicp", "C7", "-", "v", min_x=0)
+    draw(bx, ("lcp", "siconos-lemke", 1), "static LCP, Lemke: Siconos (peer)", "k", ":", "D", min_x=0)
+    for k, r in enumerate(failed):
+        bx.loglog(int(r["dofs"]), float(r["wall_s"]), "x", color="red", ms=10, mew=2,
+                  label=f"failed: {r['method']} ({r['status']})" if k < 3 else None)
+    notrun = sorted({f"{r['method']} at {int(r['dofs']):.0e} DOFs: {r['status']}" for r in rows
+                     if r["status"].startswith("not run") and r["ranks"] == "1" and r["method"] != "enumerate"})
+    if notrun:
+        bx.text(0.99, 0.01, "\n".join(notrun), transform=bx.transAxes, ha="right", va="bottom", fontsize=7,
+                bbox=dict(fc="white", ec="0.7"))
+    bx.set(xlabel="DOFs of the lattice", ylabel="wall time [s]",
+           title="peers: MEiCP enumeration (tiny lattices nx = 6–12; too large from 10^4 DOFs)\n"
+                 "vs active-set; static contact LCP, meicp vs Siconos; slopes over all points (active-set: from 10^5)")
+    bx.grid(True, which="both", alpha=0.3)
+    bx.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
+    fig.tight_layout()
+    fig.savefig(f"{out}_time.png", dpi=110)
+    plt.close(fig)
+    # 2. memory
+    fig, ax = plt.subplots(figsize=(10, 6.5))
+    for stage, method, label in pipeline:
+        for ranks, ls, mk in ((1, "-", "o"), (2, "--", "s")):
+            draw(ax, (stage, method, ranks), label, colour[stage], ls, mk, idx=2)
+    draw(ax, ("eigensolve", "arpack+superlu", 1), "peer: ARPACK + SuperLU", "k", ":", "D", idx=2)
+    ax.set(xlabel="DOFs of the lattice", ylabel="peak resident set during the stage, per rank (largest rank),\n"
+           "minus the process after imports [MB]",
+           title="peak memory per stage (holds what earlier stages keep: K, M, the pencil)\n"
+                 "solid 1 rank, dashed 2 ranks; slopes from 10^5 DOFs up")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(f"{out}_memory.png", dpi=110)
+    plt.close(fig)
+    # 3. speedup and efficiency 1 -> 2 ranks
+    fig, ax = plt.subplots(figsize=(10, 6.5))
+    pairs = [("assemble", "meicp-scipy", "meicp-petsc", "assembly (SciPy 1 rank → PETSc 2 ranks)"),
+             ("pencil", "meicp-scipy", "meicp-petsc", "reduced pencil (SciPy → PETSc products)"),
+             ("eigensolve", "slepc-krylovschur+mumps", None, "one eigen-solve, SLEPc + MUMPS"),
+             ("meicp", "active-set", None, "MEiCP active-set"),
+             ("analyze", "meicp-analyze", None, "analyze, end to end")]
+    for stage, m1, m2, label in pairs:
+        one = {d: t for d, t, _ in series.get((stage, m1, 1), []) if d >= main}
+        two = {d: t for d, t, _ in series.get((stage, m2 or m1, 2), []) if d >= main}
+        ds = sorted(set(one) & set(two))
+        if ds:
+            ax.semilogx(ds, [one[d] / two[d] for d in ds], marker="o", color=colour[stage], label=label)
+            # runs that did not get their cores: CPU time / wall time below 0.9 on some rank
+            cpu = {(r["method"], int(r["ranks"]), int(r["dofs"])): r.get("cpu_frac") or "1" for r in ok
+                   if r["stage"] == stage}
+            bad = [d for d in ds if min(float(cpu.get((m1, 1, d), 1)), float(cpu.get((m2 or m1, 2, d), 1))) < 0.9]
+            ax.plot(bad, [one[d] / two[d] for d in bad], "o", ms=13, mfc="none", mec="0.3", mew=1.5,
+                    label="descheduled: CPU/wall < 0.9 on a rank" if stage == "analyze" else None)
+    ax.axhline(2, color="k", ls=":", lw=1)
+    ax.axhline(1, color="0.5", ls="--", lw=1)
+    ax.text(1.1e4, 2.03, "ideal on 2 ranks (efficiency 1)", fontsize=8)
+    ax.text(1.1e4, 1.03, "no gain (efficiency 0.5)", fontsize=8, color="0.4")
+    ax.set(xlabel="DOFs of the lattice", ylabel="speedup  t(1 rank) / t(2 ranks)", ylim=(0, 2.4),
+           title="speedup 1 → 2 ranks on the 2-core machine (parallel efficiency = speedup / 2)")
+    sec = ax.secondary_yaxis("right", functions=(lambda s: s / 2, lambda e: 2 * e))
+    sec.set_ylabel("parallel efficiency")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3)
+    fig.tight_layout()
+    fig.savefig(f"{out}_speedup.png", dpi=110)
+    plt.close(fig)
+    print(f"wrote {out}_time.png, {out}_memory.png, {out}_speedup.png")
+
+
+# --- failure map (bench_failure.py) ---
+
+FAILURE_COLOURS = {"correct": "#2ca02c", "wrong": "#d62728", "failed": "#ff7f0e", "none_reported": "#1f77b4",
+                   "na": "#c7c7c7"}
+FAILURE_LABELS = {"correct": "correct", "wrong": "wrong answer",
+                  "failed": "failure status (a solution exists)",
+                  "none_reported": "failure status / no answer (none exists: honest, no proof)",
+                  "na": "refused: not applicable (clear error)"}
+FAILURE_PANELS = [
+    ("mu", "two_layers", "1. friction μ across μ_c = 1.906 (two_layers, every base node slip+)", "μ"),
+    ("contrast", "two_layers", "2. stiffness contrast (two_layers, μ = 3)", "k_B / k_A"),
+    ("degenerate", "z_family", "3a. Z-family n = 8: δ = 0 gives repeated eigenvalues", "δ"),
+    ("degenerate", "twin", "3b. mirror twins: 2nd copy at μ = 3(1 + δ), δ = 0 double σ", "δ"),
+    ("flutter", "mode_coupling", "4a. mode coupling: real σ pair turns complex past γ ≈ 0.5", "γ"),
+    ("flutter", "sheared", "4b. sheared lattice, stick/slip+/stick: complex σ, no real σ ≥ 0", "μ"),
+    ("lcp", "compression", "5a. static slip LCP, compressive load (q < 0)", "μ"),
+    ("lcp", "lift", "5b. static slip LCP, lifting load (q > 0)", "μ"),
+]
+
+
+def _failure_family(r):
+    if r["sweep"] == "lcp":
+        return r["settings"].split("=", 1)[1]
+    return r["problem"].split(" ")[0]
+
+
+def chart_failure(path):
+    """Failure map: per sweep a grid of methods × parameter points coloured by outcome, with a
+    reference row (what the independent reference says at that point)."""
+    from matplotlib.patches import Patch
+
+    rows = read(path)
+    out = Path(path).with_suffix("")
+    panels = [p for p in FAILURE_PANELS if any(r["sweep"] == p[0] and _failure_family(r) == p[1] for r in rows)]
+    if not panels:
+        return
+    ncols = 2
+    nrows = (len(panels) + 1) // 2
+    fig, axes = plt.subplots(nrows, ncols, figsize=(17, 3.6 * nrows + 1.0), squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.axis("off")
+    for ax, (sweep, family, title, xlabel) in zip(axes.flat, panels):
+        sel = [r for r in rows if r["sweep"] == sweep and _failure_family(r) == family]
+        params = sorted({r["param"] for r in sel}, key=float)
+        methods = list(dict.fromkeys(r["method"] for r in sel))
+        ref = {r["param"]: (r["reference"], r["classes"]) for r in sel}
+        ref_settings = {r["param"]: r["settings"] for r in sel}
+        grid = {(r["method"], r["param"]): r["outcome"] for r in sel}
+        for i, m in enumerate(methods):
+            for j, p in enumerate(params):
+                o = grid.get((m, p))
+                if o is not None:
+                    ax.add_patch(plt.Rectangle((j, len(methods) - 1 - i), 0.96, 0.9, color=FAILURE_COLOURS[o]))
+        # reference row on top: what exists at this point
+        top = len(methods)
+        for j, p in enumerate(params):
+            text, classes = ref[p]
+            if sweep == "lcp":
+                label = text.split(" ")[0] + " sol"
+                colour = "#f2f2f2" if label.startswith("0") else "#d9f0d3"
+                if "P=True" in classes:
+                    label += "\nP"
+                elif "Q=False" in classes:
+                    label += "\nnot Q"
+            else:
+                exists = not text.startswith("none")
+                cplx = "complex" in text or (classes.startswith("max|Im sigma|=")
+                                             and float(classes.split("=")[1].split(";")[0]) > 1e-8)
+                label = (("σ≥0" if "lam_min=0" in ref_settings[p] else "sol.") if exists else "none") \
+                    + ("\ncplx" if cplx else "")
+                colour = "#d9f0d3" if exists else ("#e5d8f0" if cplx else "#f2f2f2")
+            ax.add_patch(plt.Rectangle((j, top + 0.1), 0.96, 1.1, color=colour))
+            ax.text(j + 0.48, top + 0.65, label, ha="center", va="center", fontsize=6.5)
+        ax.set_xlim(0, len(params))
+        ax.set_ylim(0, top + 1.25)
+        ax.set_yticks([i + 0.45 for i in range(len(methods))] + [top + 0.65])
+        ax.set_yticklabels(methods[::-1] + ["reference"], fontsize=8)
+        ax.set_xticks([j + 0.48 for j in range(len(params))])
+        ax.set_xticklabels([f"{float(p):.8g}" for p in params], rotation=45, ha="right", fontsize=7)
+        ax.set_xlabel(xlabel + " (one column per point, not to scale)", fontsize=8)
+        ax.set_title(title, fontsize=9.5)
+        ax.tick_params(length=0)
+        for s in ax.spines.values():
+            s.set_visible(False)
+    handles = [Patch(color=c, label=FAILURE_LABELS[k]) for k, c in FAILURE_COLOURS.items()]
+    handles += [Patch(color="#d9f0d3", label="reference: a real σ ≥ 0 mode / LCP solution exists"),
+                Patch(color="#e5d8f0", label="reference: no real σ ≥ 0, complex σ (flutter)"),
+                Patch(color="#f2f2f2", label="reference: none exists")]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8.5, frameon=False)
+    fig.suptitle("Failure map: each method's outcome against an independent brute-force / analytic reference",
+                 fontsize=12)
+    fig.tight_layout(rect=(0, 0.06, 1, 0.97))
+    fig.savefig(f"{out}.png", dpi=110)
+    plt.close(fig)
+    print(f"wrote {out}.png")
+
+
+# --- resolution convergence and the cost of scene features (bench_resolution.py) ---
+
+def chart_resolution(path):
+    """Resolution study (scripts/bench_resolution.py).  resolution.png: μ_c's relative error
+    against its Richardson limit vs DOFs (log-log) with the 1e-3 line and the fitted order, the
+    growth rate λ vs DOFs (it has no limit), and the time of each computation vs DOFs.
+    resolution_features.png: median time (and peak memory) of each scene feature relative to
+    the base scene at the same size, measured side by side."""
+    import numpy as np
+
+    rows = read(path)
+    out = Path(path).with_suffix("")
+    conv = [r for r in rows if r["part"] == "convergence"]
+    if conv:
+        fig, axes = plt.subplots(1, 3, figsize=(18, 5.2))
+        ax = axes[0]
+        lim = next((r for r in conv if r["quantity"] == "mu_c_limit"), None)
+        styles = {"critical_friction": ("s", "C3", 9), "condensed-enumeration": ("o", "C0", 6),
+                  "condensed-full-support": ("^", "C2", 6)}
+        if lim and lim["status"] == "converges":
+            limit, p = float(lim["value"]), float(lim["order"])
+            for m, (mk, c, ms) in styles.items():
+                pts = sorted((int(r["dofs"]), float(r["error"])) for r in conv
+                             if r["quantity"] == "mu_c" and r["method"] == m and r["error"])
+                if pts:
+                    ax.loglog(*zip(*pts), mk, color=c, ms=ms, mfc="none" if m == "critical_friction" else c,
+                              label={"critical_friction": "meicp.critical_friction",
+                                     "condensed-enumeration": "condensed EiCP in μ, all supports (proof)",
+                                     "condensed-full-support": "condensed, full support (certified)"}[m])
+            fs = sorted((int(r["dofs"]), float(r["error"]), int(r["n"])) for r in conv
+                        if r["quantity"] == "mu_c" and r["method"] == "condensed-full-support" and r["error"])
+            d1, e1, n1 = fs[-1]
+            # error ∝ a^p ∝ n^-p; DOFs ∝ n²: error ∝ DOFs^(-p/2); extend the fitted line to 1e-3
+            n_need = n1 * (e1 / 1e-3) ** (1 / p)
+            d_need = d1 * (n_need / n1) ** 2
+            dd = np.geomspace(fs[0][0], max(d_need, d1) * 1.5, 50)
+            ax.loglog(dd, e1 * (dd / d1) ** (-p / 2), "--", color="0.4",
+                      label=f"observed order p = {p:.2f} in a (error ∝ DOFs^-{p / 2:.2f})")
+            ax.axhline(1e-3, color="C3", lw=1)
+            ax.text(fs[0][0], 1.15e-3, "1e-3", color="C3")
+            ax.axvline(d_need, color="C3", ls=":", lw=1)
+            ax.text(d_need, 2e-3, f"1e-3 predicted at\nnx ≈ {n_need + 1:,.0f}\n({d_need:.1e} DOFs) ",
+                    color="C3", fontsize=8, ha="right")
+            ax.set_title(f"critical friction μ_c: error vs Richardson limit {limit:.5f}")
+        ax.set_xlabel("DOFs of the lattice")
+        ax.set_ylabel("relative error |μ_c − μ_c,∞| / μ_c,∞")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7.5, loc="lower left")
+        # λ: no limit
+        ax = axes[1]
+        lam = [r for r in conv if r["quantity"] == "lambda" and r["value"]]
+        for m, (mk, c) in {"enumerate": ("o", "C0"), "active-set": ("s", "C1")}.items():
+            pts = sorted((int(r["dofs"]), float(r["value"])) for r in lam if r["method"] == m)
+            if pts:
+                ax.loglog(*zip(*pts), mk, color=c, ms=7, label=f"meicp.analyze ({m})")
+        refs = sorted((int(r["dofs"]), float(r["reference"])) for r in lam if r.get("reference")
+                      and r["reference"] != "none")
+        if refs:
+            ax.loglog(*zip(*refs), "k+", ms=12, label="dense SciPy eig of the same pencil (check)")
+        ll = next((r for r in conv if r["quantity"] == "lambda_limit"), None)
+        pts = sorted((int(r["dofs"]), float(r["value"])) for r in lam)
+        if pts:
+            ax.loglog(*zip(*pts), "-", color="0.7", zorder=0)
+        if ll is not None and ll["status"] == "diverges":
+            s = float(ll["order"])
+            d1, v1 = pts[-1]
+            dd = np.array([pts[0][0], d1])
+            ax.loglog(dd, v1 * (dd / d1) ** (s / 2), "--", color="C3",
+                      label=f"no limit: λ ∝ n^{s:.2f} ≈ 1/a (fit, 3 finest levels)")
+        ax.set_xlabel("DOFs of the lattice")
+        ax.set_ylabel("growth rate λ = √σ of the fastest mode")
+        ax.set_title("divergence growth rate λ: grows without limit (mode at the corner)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7.5, loc="upper left")
+        # time
+        ax = axes[2]
+        series = {("lambda", "enumerate"): ("analyze, enumeration", "o", "C0"),
+                  ("lambda", "active-set"): ("analyze, active-set", "s", "C1"),
+                  ("mu_c", "critical_friction"): ("critical_friction", "s", "C3"),
+                  ("mu_c", "condensed-enumeration"): ("μ_c condensed, all supports", "o", "C9"),
+                  ("mu_c", "condensed-full-support"): ("μ_c condensed, full support", "^", "C2")}
+        for (q, m), (label, mk, c) in series.items():
+            pts = sorted((int(r["dofs"]), max(float(r["wall_s"]), 1e-3)) for r in conv
+                         if r["quantity"] == q and r["method"] == m and r["wall_s"])
+            if pts:
+                ax.loglog(*zip(*pts), mk + "-", color=c, label=label)
+        ax.set_xlabel("DOFs of the lattice")
+        ax.set_ylabel("wall time, one run [s] (floor 1 ms)")
+        ax.set_title("cost per level (1 core)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7.5, loc="upper left")
+        fig.suptitle("One physical scene (4×4 two-layer block, free sides, every base node sliding, μ = 3) "
+                     "refined: a = 4/n, nx = n + 1", fontsize=11)
+        fig.tight_layout(rect=(0, 0, 1, 0.95))
+        fig.savefig(f"{out}.png", dpi=110)
+        plt.close(fig)
+        print(f"wrote {out}.png")
+    feats = [r for r in rows if r["part"] == "features"]
+    if feats:
+        sizes = sorted({int(r["n"]) for r in feats})
+        fig, axes = plt.subplots(1, 2, figsize=(15, 5.5))
+        names = list(dict.fromkeys(r["feature"] for r in feats if r["feature"] != "base"))
+        width = 0.8 / len(sizes)
+        for k, n in enumerate(sizes):
+            mine = [r for r in feats if int(r["n"]) == n]
+            ok = lambda f: [r for r in mine if r["feature"] == f and r["status"] != "failed"]  # noqa: E731
+            base_t = np.median([float(r["wall_s"]) for r in ok("base")])
+            base_m = np.median([float(r["peak_rss_mb"]) for r in ok("base")])
+            dofs = mine[0]["dofs"]
+            for ax, key, base in ((axes[0], "wall_s", base_t), (axes[1], "peak_rss_mb", None)):
+                xs, ys, notes = [], [], []
+                for i, f in enumerate(["base"] + names):
+                    rs = ok(f)
+                    if not rs:
+                        continue
+                    v = np.median([float(r[key]) for r in rs])
+                    xs.append(i + (k - (len(sizes) - 1) / 2) * width)
+                    ys.append(v / base if base else max(v, 0.05))
+                    st = {r["status"] for r in rs}
+                    notes.append("" if st == {"solved"} else "/".join(sorted(st)))
+                bars = ax.bar(xs, ys, width, label=f"n = {n} ({dofs} DOFs)" +
+                              (f", base {base_t:.3f} s" if base else f", base {base_m:.1f} MB"), color=f"C{k}")
+                for b, y, note in zip(bars, ys, notes):
+                    ax.text(b.get_x() + b.get_width() / 2, y * 1.08, f"{y:.3g}" + ("×" if base else ""),
+                            ha="center", fontsize=7.5)
+                    if note:
+                        ax.text(b.get_x() + b.get_width() / 2, y * 1.5, note, ha="center", fontsize=7,
+                                color="C3", rotation=90, va="bottom")
+        for ax, label in ((axes[0], "time relative to the base scene at the same size (median)"),
+                          (axes[1], "peak resident memory above the start [MB] (median)")):
+            ax.set_xticks(range(len(names) + 1), ["base"] + names, rotation=30, ha="right")
+            ax.set_yscale("log")
+            ax.set_ylabel(label)
+            ax.grid(True, axis="y", which="both", alpha=0.3)
+            ax.legend(fontsize=8, loc="upper right")
+        axes[0].axhline(1, color="k", lw=0.8)
+        lo, hi = axes[0].get_ylim()
+        axes[0].set_ylim(lo, hi * 8)
+        lo, hi = axes[1].get_ylim()
+        axes[1].set_ylim(lo, hi * 8)
+        fig.suptitle("Cost of each scene feature (fresh process per run, repeats interleaved; red: not 'solved')",
+                     fontsize=11)
+        fig.tight_layout(rect=(0, 0, 1, 0.95))
+        fig.savefig(f"{out}_features.png", dpi=110)
+        plt.close(fig)
+        print(f"wrote {out}_features.png")
+
+
+CHARTS = {name[len("chart_"):]: f for name, f in sorted(globals().items()) if name.startswith("chart_")}
 
 if __name__ == "__main__":
     if len(sys.argv) != 3 or sys.argv[1] not in CHARTS:

@@ -259,3 +259,19 @@ def test_public_names():
     r = meicp.solve_lcp(np.eye(2), [-1, 1])
     for field in ("x", "w", "status", "success", "method", "iterations", "residual"):
         assert hasattr(r, field)
+
+
+def test_a_non_finite_candidate_never_passes_the_certificate():
+    from meicp.lcp.problem import LCPProblem, LCPResult, certify
+
+    problem = LCPProblem.from_data(np.eye(2), np.array([-1.0, 1.0]))
+    for bad in ([np.nan, 0.0], [np.inf, 0.0]):
+        r = certify(problem, LCPResult(method="test"), np.array(bad))
+        assert not r.success and r.residual == np.inf
+
+
+def test_pgs_stops_on_diverging_sweeps_with_a_status():
+    # symmetric, positive diagonal, no solution: the sweeps grow without bound
+    r = solve_lcp(np.array([[1.0, -2.0], [-2.0, 1.0]]), [-1.0, -1.0], method="pgs")
+    assert r.status == "diverged" and not r.success and "diverged" in r.message
+    assert solve_lcp(np.array([[1.0, -2.0], [-2.0, 1.0]]), [-1.0, -1.0], method="enumerate").status == "infeasible"

@@ -168,7 +168,8 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
             kwargs.setdefault("max_iter", solver.max_iterations)
     eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=lam_min, tol=tol,
                       comm=comm if _size(comm) > 1 else None, **kwargs)
-    modes = [_mode(sol, red, sets) for sol in eicp.solutions if sol.lam >= lam_min - tol]
+    # strict: a σ below lam_min (even by 5e-11 just below μ_c) is not a divergence mode
+    modes = [_mode(sol, red, sets) for sol in eicp.solutions if sol.lam >= lam_min]
     if chosen == "enumerate":
         cover = eicp.coverage.get("supports", 0)
         if modes:

@@ -113,7 +113,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                            f"a different target (-{prefix}eps_target) may avoid it")
                 break
             if lam_min is not None:
-                pairs = [p for p in pairs if p[0] >= lam_min - tol]
+                pairs = [p for p in pairs if p[0] >= lam_min]  # strict: tol is not a λ tolerance
             if not pairs:
                 status = "not_converged"
                 message = (f"no real eigenpair{'' if lam_min is None else f' with λ ≥ {lam_min}'} among "

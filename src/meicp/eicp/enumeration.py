@@ -186,7 +186,11 @@ class _Enumerator:
         """Certify a stack of candidates; keep the passing ones not seen before (a support
         gives one solution per eigenvalue; ±ξ on an empty support are one solution)."""
         X, W, in_support, res = certify_batch(self.problem, lams, X, self.scales)
-        for r in np.flatnonzero(res <= self.tol):
+        # the windows above keep a slack so that no candidate is lost to rounding, but a
+        # reported solution must lie in [lam_min, lam_max]: e.g. σ = −5e-11 just below μ_c
+        # is not a divergence mode (failure-map finding, issue 7)
+        inside = (lams >= self.lam_min) & (lams <= self.lam_max)
+        for r in np.flatnonzero((res <= self.tol) & inside):
             key = (in_support[r].tobytes(), float(f"{lams[r]:.9g}"))
             if key in self.seen:
                 continue

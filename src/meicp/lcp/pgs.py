@@ -81,17 +81,22 @@ def pgs(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 100000
     result = LCPResult(method="pgs")
     status = "max_iterations"
     sweep = 0
-    for sweep in range(1, max_iter + 1):
-        for idx, rows, diag in blocks:
-            x[idx] = np.maximum(0.0, x[idx] - omega * (rows @ x + q[idx]) / diag)
-        if sweep % check_every == 0:
-            natural = np.abs(np.minimum(x, M @ x + q)).max()
-            if natural <= stop * max(scale_w, problem.matrix_scale * np.abs(x).max()):
-                status = "solved"
-                break
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is caught below
+        for sweep in range(1, max_iter + 1):
+            for idx, rows, diag in blocks:
+                x[idx] = np.maximum(0.0, x[idx] - omega * (rows @ x + q[idx]) / diag)
+            if sweep % check_every == 0:
+                natural = np.abs(np.minimum(x, M @ x + q)).max()
+                if not np.isfinite(natural):  # e.g. an LCP with no solution: x grows without bound
+                    status = "diverged"
+                    break
+                if natural <= stop * max(scale_w, problem.matrix_scale * np.abs(x).max()):
+                    status = "solved"
+                    break
     result.iterations = sweep
     result.timings.update(colouring=t1 - t0, solve=time.perf_counter() - t1)
     if status != "solved":
-        result.message = f"no convergence in {max_iter} sweeps"
-        return certify(problem, result, x, tol=tol, failure_status="max_iterations")
+        result.message = (f"the sweeps diverged (|x| overflowed after {sweep} sweeps)" if status == "diverged"
+                          else f"no convergence in {max_iter} sweeps")
+        return certify(problem, result, x, tol=tol, failure_status=status)
     return certify(problem, result, best_of(problem, x, refine_on_support(problem, x)), tol=tol)
