@@ -284,15 +284,15 @@ def test_nonsymmetric_lcp_refused_by_symmetric_methods(infeasible_slip_lcp, meth
         meicp.solve_lcp(*infeasible_slip_lcp, method=method)
 
 
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # x overflows while PGS diverges
 def test_pgs_symmetric_non_p_without_solution_fails():
     """Symmetric, positive diagonal, indefinite (not P): LCP(q, M) has no solution; PGS
-    diverges and reports max_iterations, never an x."""
+    diverges, stops when x overflows and reports "diverged", never an x."""
     M = np.array([[1.0, -2.0], [-2.0, 1.0]])
     q = np.array([-1.0, -1.0])
     assert _lcp_solutions(M, q) == []
-    res = meicp.solve_lcp(M, q, method="pgs", max_iter=500)
-    assert res.status == "max_iterations" and not res.success
+    res = meicp.solve_lcp(M, q, method="pgs")
+    assert res.status == "diverged" and not res.success and res.iterations < 1000
+    assert meicp.solve_lcp(M, q, method="enumerate").status == "infeasible"
 
 
 def test_large_mu_lift_load_two_solutions():
