@@ -98,9 +98,12 @@ class LCPResult(Result):
 
 def relative_residual(problem: LCPProblem, x: np.ndarray) -> tuple[float, np.ndarray]:
     """The certificate residual of ``x`` and the recomputed ``w``."""
+    # max() below would drop a NaN: a non-finite x or w never passes
+    if not np.all(np.isfinite(x)):
+        return float("inf"), np.full(problem.n, np.nan)
     w = problem.matvec(x) + problem.q
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(w))):
-        return float("inf"), w  # max() below would drop a NaN: a non-finite x never passes
+    if not np.all(np.isfinite(w)):
+        return float("inf"), w
     sx = float(np.max(np.abs(x))) if x.size else 0.0
     sw = max(float(np.max(np.abs(problem.q))), problem.matrix_scale * sx)
     sx = sx if sx > 0 else 1.0
