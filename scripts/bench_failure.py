@@ -455,6 +455,15 @@ def slip_lcp_data():
     return En.T @ sol[:, :nc], En.T @ sol[:, nc:2 * nc], (En.T @ sol[:, -1])
 
 
+def slip_lcp(mu, data=None):
+    """LCP(q, M) of the static slip problem at friction μ under the compressive load:
+    M = G_nn − μ G_nt and q = c_n, each scaled to max |entry| = 1.  ``data``: the
+    (G_nn, G_nt, c_n) of ``slip_lcp_data()``, to reuse across μ (computed if None)."""
+    Gnn, Gnt, cn = slip_lcp_data() if data is None else data
+    M = Gnn - mu * Gnt
+    return M / np.abs(M).max(), cn / np.abs(cn).max()
+
+
 def judge_lcp(method, res, ref):
     if method == "enumerate" or method == "siconos-enum":
         pass
@@ -486,7 +495,7 @@ def sweep_lcp(quick):
     from meicp.core.errors import ProblemError
     from meicp.lcp.siconos import siconos_solve
 
-    Gnn, Gnt, cn = slip_lcp_data()
+    data = Gnn, Gnt, cn = slip_lcp_data()
 
     def min_minor(mu):  # brute force over the 31 principal minors (independent of classify)
         M = Gnn - mu * Gnt
@@ -504,8 +513,7 @@ def sweep_lcp(quick):
     rows = []
     for load, q in loads.items():
         for mu in mus:
-            M = Gnn - mu * Gnt
-            M = M / np.abs(M).max()
+            M, _ = slip_lcp(mu, data)
             ref, singular = ref_lcp(M, q)
             assert singular == 0
             c = meicp.classify(M)

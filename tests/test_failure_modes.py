@@ -4,137 +4,42 @@ the explicit "no divergence mode" — never a wrong, certified-looking answer.
 
 Each test builds one point of the failure map, checks it against an independent
 reference (analytic, or brute force with scipy.linalg.eig / numpy.linalg.solve), and
-pins what the method reports there.  Serial and fast.
+pins what the method reports there.  The problems and the brute-force references are the
+failure map's own (imported from scripts/bench_failure.py).  Serial and fast.
 """
 
 from __future__ import annotations
 
 import itertools
+import sys
 from pathlib import Path
 
-import numpy as np
-import pytest
-import scipy.linalg as sla
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
 
-import meicp
-from meicp.core.errors import ProblemError
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import scipy.linalg as sla  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-MU_C = 1.90603249  # two_layers.toml, every base node slip+
+import bench_failure as fm  # noqa: E402  (the failure map's problems and references)
+import meicp  # noqa: E402
+from meicp.core.errors import ProblemError  # noqa: E402
 
-
-# ----------------------------------------------------------------------------- builders
-
-def _scene(mu=3.0, kB=5.0, shear=0.0, states='"slip+"'):
-    from meicp.io.scene import loads_scene
-
-    t = (ROOT / "data/scenes/two_layers.toml").read_text()
-    for old, new in (("friction = 3.0", f"friction = {mu!r}"), ("stiffness = 5.0", f"stiffness = {kB!r}"),
-                     ("shear = 0.0 ", f"shear = {shear!r} "), ('states = "slip+"', f"states = {states}")):
-        t = t.replace(old, new)
-    return loads_scene(t)
+MU_C = fm.MU_C  # two_layers.toml, every base node slip+
 
 
-def _pencil(sc):
-    from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.lattice.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
-    model = LatticeModel(sc)
-    K, M = assemble(model)
-    red = reduced_system(model, contact_sets(sc, model))
-    return -(red.P @ K @ red.Q).toarray(), (red.P @ M @ red.Q).toarray(), red.J
-
-
-def _brute_force_sigmas(A, B, J, lam_min=0.0):
-    """Every real MEiCP λ ≥ lam_min, support by support with scipy.linalg.eig."""
-    n = A.shape[0]
-    F = np.setdiff1d(np.arange(n), J)
-    out = []
-    for k in range(len(J) + 1):
-        for S in itertools.combinations(list(J), k):
-            R = np.concatenate([F, np.array(S, dtype=int)])
-            lam, V = sla.eig(A[np.ix_(R, R)], B[np.ix_(R, R)])
-            for l, v in zip(lam, V.T):
-                if not np.isfinite(l) or abs(l.imag) > 1e-8 * max(1, abs(l)) or l.real < lam_min:
-                    continue
-                v = v.real / np.abs(v.real).max()
-                if k and v[F.size:].sum() < 0:
-                    v = -v
-                if k and v[F.size:].min() <= 1e-9:
-                    continue
-                x = np.zeros(n)
-                x[R] = v
-                w = l.real * (B @ x) - A @ x
-                off = np.setdiff1d(J, S)
-                if off.size and w[off].min() < -1e-9 * (np.abs(A).max() + abs(l.real) * np.abs(B).max()):
-                    continue
-                out.append(float(l.real))
-    return sorted(out, reverse=True)
-
-
-def _mode_coupling(gamma):
-    """scripts/bench_failure.py's flutter family: real σ pair → complex past γ ≈ 0.5."""
-    n = 8
-    rng = np.random.default_rng(7)
-    C = rng.uniform(-0.05, 0.05, (n, n))
-    C = 0.5 * (C + C.T)
-    C[:2, :2] = 0.0
-    A = np.diag([1.5, 0.5, -1.0, -1.5, -2.0, -2.5, -3.0, -3.5]) + C
-    A[0, 1] += gamma
-    A[1, 0] -= gamma
-    B = np.diag(np.concatenate([[1.0, 1.0], rng.uniform(0.8, 1.2, n - 2)]))
-    return A, B, np.arange(5, 8)
-
-
-def _slip_lcp(mu):
-    """The static slip LCP of two_layers (every base node sliding +x): M = G_nn − μ G_nt
-    scaled, q the compressive load's gap response (all entries −1)."""
-    from meicp.contact.static import prescribed_displacements
-    from meicp.lattice.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
-    sc = _scene()
-    m = LatticeModel(sc)
-    K = assemble(m)[0].toarray()
-    presc, up, _ = prescribed_displacements(m, sc.load)
-    free = m.free_dofs()
-    pos = {int(d): i for i, d in enumerate(free)}
-    nodes = m.contact_nodes()
-    En = np.zeros((free.size, nodes.size))
-    Et = np.zeros_like(En)
-    for k, nd in enumerate(nodes):
-        En[pos[2 * nd + 1], k] = 1.0
-        Et[pos[2 * nd], k] = 1.0
-    sol = np.linalg.solve(K[np.ix_(free, free)], np.hstack([En, Et, -K[np.ix_(free, presc)] @ up[:, None]]))
-    nc = nodes.size
-    M = En.T @ sol[:, :nc] - mu * (En.T @ sol[:, nc:2 * nc])
-    q = En.T @ sol[:, -1]
-    return M / np.abs(M).max(), q / np.abs(q).max()
-
-
-def _lcp_solutions(M, q):
-    n = q.size
-    sols = []
-    for k in range(n + 1):
-        for S in itertools.combinations(range(n), k):
-            S = list(S)
-            x = np.zeros(n)
-            if k:
-                x[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
-            if x.min() >= -1e-12 and (M @ x + q).min() >= -1e-10:
-                sols.append(x)
-    return sols
+def _sigmas(A, B, J):
+    """Every real MEiCP σ ≥ 0 of the failure map's brute-force reference, largest first."""
+    return sorted((lam for lam, _ in fm.ref_eicp(A, B, J, lam_min=0.0)[0]), reverse=True)
 
 
 # ----------------------------------------------------------------------------- flutter
 
 @pytest.fixture(scope="module")
 def flutter_pencil():
-    A, B, J = _mode_coupling(0.7)
+    A, B, J = fm.mode_coupling(0.7)
     ev = sla.eigvals(A, B)
     assert np.abs(ev.imag).max() > 0.1          # a complex pair: flutter
-    assert _brute_force_sigmas(A, B, J) == []    # and no real σ ≥ 0 at all
+    assert _sigmas(A, B, J) == []  # and no real σ ≥ 0 at all
     return A, B, J
 
 
@@ -162,10 +67,10 @@ def test_flutter_rayleigh_refuses_nonsymmetric(flutter_pencil):
 
 def test_flutter_lattice_analyze_says_no_divergence_mode():
     """Sheared lattice with stick/slip+/stick states at μ = 4: complex σ, no real σ ≥ 0."""
-    sc = _scene(mu=4.0, shear=0.5, states='["stick", "slip+", "slip+", "slip+", "stick"]')
-    A, B, J = _pencil(sc)
+    sc = fm.scene(mu=4.0, shear=0.5, states='["stick", "slip+", "slip+", "slip+", "stick"]')
+    A, B, J = fm.pencil(sc)
     assert np.abs(sla.eigvals(A, B).imag).max() > 0.1
-    assert _brute_force_sigmas(A, B, J) == []
+    assert _sigmas(A, B, J) == []
     r = meicp.analyze(sc)  # enumeration: a proof that no divergence mode exists
     assert r.stable is True and r.modes == [] and "no solution with σ ≥ 0" in r.evidence
     r = meicp.analyze(sc, method="active-set")  # nonsymmetric: no proof, and it says so
@@ -179,24 +84,24 @@ def test_just_below_mu_c_no_negative_sigma_reported_as_mode(method):
     """Regression (failure map): at μ = μ_c(1 − 1e-10) the largest σ is −5e-11; enumerate,
     active-set and analyze used to report it as a divergence mode (window slack tol = 1e-10
     on λ), with analyze saying "unstable".  Now λ < lam_min is never a solution."""
-    sc = _scene(mu=MU_C * (1 - 1e-9))
-    A, B, J = _pencil(sc)
-    assert _brute_force_sigmas(A, B, J) == []
+    sc = fm.scene(mu=MU_C * (1 - 1e-9))
+    A, B, J = fm.pencil(sc)
+    assert _sigmas(A, B, J) == []
     res = meicp.solve_eicp(A, B, J=J, method=method, lam_min=0.0)
     assert res.solutions == [] and not res.success
     r = meicp.analyze(sc)
     assert r.stable is True and r.modes == []
-    sc = _scene(mu=MU_C * (1 + 1e-6))  # just above: a genuine σ ≈ 5e-7 > 0 mode
-    res = meicp.solve_eicp(*_pencil(sc)[:2], J=J, method=method, lam_min=0.0)
+    sc = fm.scene(mu=MU_C * (1 + 1e-6))  # just above: a genuine σ ≈ 5e-7 > 0 mode
+    res = meicp.solve_eicp(*fm.pencil(sc)[:2], J=J, method=method, lam_min=0.0)
     assert res.success and 0 < res.lam < 1e-5
 
 
 def test_critical_friction_matches_brute_force_bisection():
-    mu_c = meicp.critical_friction(_scene())
+    mu_c = meicp.critical_friction(fm.scene())
     assert mu_c == pytest.approx(MU_C, rel=1e-8)
     for mu, exists in ((mu_c * (1 - 1e-6), False), (mu_c * (1 + 1e-6), True)):
-        A, B, J = _pencil(_scene(mu=mu))
-        assert bool(_brute_force_sigmas(A, B, J)) is exists
+        A, B, J = fm.pencil(fm.scene(mu=mu))
+        assert bool(_sigmas(A, B, J)) is exists
 
 
 # ----------------------------------------------------------------------------- contrast
@@ -204,8 +109,8 @@ def test_critical_friction_matches_brute_force_bisection():
 def test_contrast_1e6_certified_or_reported():
     """k_B/k_A = 10^6: cond(A) ≈ 1.5e7.  Certified answers match the brute force to 1e-10;
     semismooth from its default start does not converge and says so."""
-    A, B, J = _pencil(_scene(kB=1e6))
-    ref = _brute_force_sigmas(A, B, J)
+    A, B, J = fm.pencil(fm.scene(kB=1e6))
+    ref = _sigmas(A, B, J)
     assert len(ref) == 1
     for method in ("enumerate", "active-set", "semismooth"):
         res = meicp.solve_eicp(A, B, J=J, method=method, lam_min=0.0)
@@ -222,8 +127,8 @@ def test_repeated_eigenvalues_enumerate_finds_every_support():
     """Z-family at δ = 0: every support of one size has the same λ_min and every block of
     size ≥ 2 a repeated eigenvalue; the 255 solutions are {λ_min(A_SS)} (Perron–Frobenius)."""
     n, a = 8, 0.5
-    A = -(a * (np.ones((n, n)) - np.eye(n)) + np.eye(n))
-    res = meicp.solve_eicp(A, np.eye(n), method="enumerate")
+    A, B = fm.z_family(0.0, n=n, a=a)
+    res = meicp.solve_eicp(A, B, method="enumerate")
     assert res.success and len(res.solutions) == 2 ** n - 1
     assert {tuple(int(j) for j in s.support) for s in res.solutions} == \
         {S for k in range(1, n + 1) for S in itertools.combinations(range(n), k)}
@@ -235,7 +140,7 @@ def test_repeated_eigenvalues_enumerate_finds_every_support():
 def test_mirror_twins_double_sigma():
     """Two identical uncoupled lattices: every σ is double and the solutions form a cone;
     every method returns σ = 0.3290549424 and nothing else."""
-    A1, B1, J1 = _pencil(_scene())
+    A1, B1, J1 = fm.pencil(fm.scene())
     A, B = sla.block_diag(A1, A1), sla.block_diag(B1, B1)
     J = np.concatenate([J1, J1 + A1.shape[0]])
     for method in ("enumerate", "active-set", "semismooth"):
@@ -248,17 +153,17 @@ def test_mirror_twins_double_sigma():
 
 @pytest.fixture(scope="module")
 def infeasible_slip_lcp():
-    M, q = _slip_lcp(3.0)
+    M, q = fm.slip_lcp(3.0)
     c = meicp.classify(M)
     assert c.p_matrix is False and c.q_matrix is False  # classes predict the loss
-    assert _lcp_solutions(M, q) == []                   # and there is indeed no solution
+    assert fm.ref_lcp(M, q)[0] == []  # and there is indeed no solution
     return M, q
 
 
 def test_slip_lcp_below_mu_c_is_p_and_unique():
-    M, q = _slip_lcp(1.0)
+    M, q = fm.slip_lcp(1.0)
     assert meicp.classify(M).p_matrix is True
-    (x,) = _lcp_solutions(M, q)
+    (x,) = fm.ref_lcp(M, q)[0]
     for method in ("lemke", "enumerate", "newton", "auto"):
         res = meicp.solve_lcp(M, q, method=method)
         assert res.success and np.allclose(res.x, x, atol=1e-9), method
@@ -289,7 +194,7 @@ def test_pgs_symmetric_non_p_without_solution_fails():
     diverges, stops when x overflows and reports "diverged", never an x."""
     M = np.array([[1.0, -2.0], [-2.0, 1.0]])
     q = np.array([-1.0, -1.0])
-    assert _lcp_solutions(M, q) == []
+    assert fm.ref_lcp(M, q)[0] == []
     res = meicp.solve_lcp(M, q, method="pgs")
     assert res.status == "diverged" and not res.success and res.iterations < 1000
     assert meicp.solve_lcp(M, q, method="enumerate").status == "infeasible"
@@ -298,9 +203,9 @@ def test_pgs_symmetric_non_p_without_solution_fails():
 def test_large_mu_lift_load_two_solutions():
     """Beyond μ_c with q > 0 uniqueness is lost: x = 0 and one more; enumerate lists both,
     single-solution methods return one of them."""
-    M, _ = _slip_lcp(3.0)
+    M, _ = fm.slip_lcp(3.0)
     q = np.ones(M.shape[0])
-    ref = _lcp_solutions(M, q)
+    ref = fm.ref_lcp(M, q)[0]
     assert len(ref) == 2
     res = meicp.solve_lcp(M, q, method="enumerate")
     assert res.success and len(res.solutions) == 2
@@ -322,11 +227,11 @@ def test_nearly_coinciding_sigmas_active_set_certified_or_certificate_failed():
     """Twins at μ = 3 and 3(1 + 1e-6): two σ 1e-6 apart.  The shift-and-invert solve mixes
     the two eigenvectors; active-set then reports certificate_failed (residual 3.5e-10 >
     1e-10) rather than the mixed vector — never a wrong σ.  enumerate finds both."""
-    A1, B1, J1 = _pencil(_scene())
-    A2, B2, _ = _pencil(_scene(mu=3.0 * (1 + 1e-6)))
+    A1, B1, J1 = fm.pencil(fm.scene())
+    A2, B2, _ = fm.pencil(fm.scene(mu=3.0 * (1 + 1e-6)))
     A, B = sla.block_diag(A1, A2), sla.block_diag(B1, B2)
     J = np.concatenate([J1, J1 + A1.shape[0]])
-    ref = _brute_force_sigmas(A1, B1, J1) + _brute_force_sigmas(A2, B2, J1)
+    ref = _sigmas(A1, B1, J1) + _sigmas(A2, B2, J1)
     res = meicp.solve_eicp(A, B, J=J, method="enumerate", lam_min=0.0)
     assert sorted(s.lam for s in res.solutions) == pytest.approx(sorted(ref), rel=1e-10)
     res = meicp.solve_eicp(A, B, J=J, method="active-set", lam_min=0.0)
