@@ -559,7 +559,7 @@ def chart_resolution(path):
                               label={"critical_friction": "meicp.critical_friction",
                                      "condensed-enumeration": "condensed EiCP in μ, all supports (proof)",
                                      "condensed-full-support": "condensed, full support (certified)"}[m])
-            fs = sorted((int(r["dofs"]), float(r["error"]), int(r["n"])) for r in conv
+            fs = sorted((int(r["dofs"]), abs(float(r["value"]) - limit) / abs(limit), int(r["n"])) for r in conv
                         if r["quantity"] == "mu_c" and r["method"] == "condensed-full-support" and r["error"])
             d1, e1, n1 = fs[-1]
             # error ∝ a^p ∝ n^-p; DOFs ∝ n²: error ∝ DOFs^(-p/2); extend the fitted line to 1e-3
