@@ -203,3 +203,34 @@ def test_tol_out_of_range_is_refused_and_a_loose_one_warned(caplog):
     with caplog.at_level("WARNING", logger="meicp"):
         r = meicp.solve_eicp(A, B, tol=1e-3)
     assert r.success and "does not pin" in caplog.text
+
+
+def test_enumeration_with_a_nearly_singular_nondiagonal_B_misses_no_solution():
+    """B_RR⁻¹A_RR loses finite eigenvalues when B has a 1e-13 singular value; a missed
+    solution would make the enumeration a false proof.  Brute force by QZ as reference."""
+    misses = 0
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        n = 5
+        A = rng.standard_normal((n, n))
+        U = np.linalg.qr(rng.standard_normal((n, n)))[0]
+        V = np.linalg.qr(rng.standard_normal((n, n)))[0]
+        B = U @ np.diag([1, 1, 1, 1, 1e-13]) @ V.T
+        want = []
+        for k in range(1, n + 1):
+            for S in itertools.combinations(range(n), k):
+                R = np.array(S)
+                lam, X = scipy.linalg.eig(A[np.ix_(R, R)], B[np.ix_(R, R)])
+                for l, x in zip(lam, X.T):
+                    if not np.isfinite(l) or abs(l.imag) > 1e-8 * max(1, abs(l)):
+                        continue
+                    x = x.real * np.sign(x.real[np.argmax(np.abs(x.real))])
+                    full = np.zeros(n)
+                    full[R] = x
+                    w = (l.real * B - A) @ full
+                    s = np.abs(A).max() + abs(l.real) * np.abs(B).max()
+                    if x.min() > 1e-9 * np.abs(x).max() and np.delete(w, R).min(initial=0) > -1e-9 * s:
+                        want.append(round(l.real, 6))
+        got = sorted({round(s.lam, 6) for s in meicp.solve_eicp(A, B, method="enumerate").solutions})
+        misses += got != sorted(set(want))
+    assert misses == 0
