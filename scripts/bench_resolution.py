@@ -19,18 +19,21 @@ scene's ``density`` is set to ρ_areal / a), μ and the prescribed states.  Meas
 the fastest divergence mode σ (λ = √σ) by ``meicp.analyze`` (the method it picked, its
 evidence, where the mode lives: its share of ‖u‖² on the leading corner node and the radius
 holding 90 % of it; a dense SciPy eigen-solve of the same reduced pencil as an independent
-check up to 600 reduced DOFs); μ_c by ``meicp.critical_friction`` where it finishes (n ≤ 8), by the same
-EiCP in μ after exact static condensation onto the |J| contact DOFs (all 2^|J| supports
-enumerated by ``meicp.solve_eicp``: a proof of the smallest μ, n ≤ 20), and beyond that by
-the smallest μ with a certified full-support solution of the condensed EiCP (the support at
-which every enumerated level attains μ_c; not a proof of minimality).  Richardson
+check up to 600 reduced DOFs); μ_c by ``meicp.critical_friction`` (it condenses the EiCP in
+μ onto the |J| = n + 1 contact DOFs and enumerates all 2^|J| supports: a proof of the
+smallest μ, up to its limit of 20 pairs, n ≤ 18), timed without its bisection check, and at
+n ≤ 8 also with the check (its default there) and by its former uncondensed path
+(``condense=False``) side by side; and at n = 4, 8, …, 256 (beyond the limit from n = 32) by
+the smallest μ with a certified full-support solution of the same condensed EiCP
+(``meicp.contact.instability.friction_pencils``; the support at which every enumerated level
+attains μ_c; not a proof of minimality).  Richardson
 extrapolation from the three finest dyadic levels gives the limit and the observed order
 (or, when the differences grow, the growth exponent).  Controls: the same block with its
 sides on rollers, and with only the middle half of the base sliding, at μ = 3 and 6.
 
 Part B, *features*: the same scene at n = 8 (nx = 9, 162 DOFs: the largest dyadic level at
-which ``analyze`` still enumerates by itself and ``critical_friction`` runs) and, for the
-features that scale, at n = 64 (8450 DOFs); timed with and without each feature, the MEiCP
+which ``analyze`` still enumerates by itself and ``critical_friction`` runs its bisection
+check by default) and, for the features that scale, at n = 64 (8450 DOFs); timed with and without each feature, the MEiCP
 solved by the active-set search unless the feature *is* enumeration; each run in a fresh
 process (wall time of the call alone, peak RSS above the resident set before it), the
 repeats interleaved so that every ratio to the base is measured side by side.
@@ -231,46 +234,11 @@ def control_rows(levels, mus, dense_max_r):
 
 
 # ---------------------------------------------------------------------------- part A: μ_c
-def condensed_pencil(scene):
-    """The σ = 0 EiCP in μ of critical_friction, (μB′ − A′)x = y, with its free DOFs (w = 0
-    rows, no μ in them) eliminated exactly: x_F = −A′_FF⁻¹ A′_FJ x_J.  Returns (Ac, Bc)."""
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spl
-
-    from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.lattice.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
-    model = LatticeModel(scene)
-    sets = contact_sets(scene, model)
-    red = reduced_system(model, sets)
-    K, _ = assemble(model)
-    mus = np.zeros(red.P.shape[0])
-    mus[red.J] = sets[0].friction
-    P0 = (red.P - sp.diags(mus) @ red.P_friction).tocsr()
-    A1, B1 = -(P0 @ K @ red.Q).tocsr(), (red.P_friction @ K @ red.Q).tocsr()
-    J = red.J
-    F = np.setdiff1d(np.arange(A1.shape[0]), J)
-    assert abs(B1[F]).sum() == 0.0, "μ appears in a free row"
-    S = -spl.splu(A1[F][:, F].tocsc()).solve(A1[F][:, J].toarray())
-    Ac = A1[J][:, J].toarray() + A1[J][:, F] @ S
-    Bc = B1[J][:, J].toarray() + B1[J][:, F] @ S
-    return Ac, Bc
-
-
-def mu_c_enumerated(Ac, Bc):
-    """All supports of the condensed EiCP.  Bc is (nearly) singular, so it is solved in
-    ν = 1/μ: (μBc − Ac)x = y ≥ 0 ⇔ (ν(−Ac) − (−Bc))x = νy ≥ 0; μ_c = 1/ν_max."""
-    import meicp
-
-    r = meicp.solve_eicp(-Bc, -Ac, method="enumerate", lam_min=0.0, tol=1e-9)
-    nus = [s.lam for s in r.solutions if s.lam > 0]
-    return (1.0 / max(nus) if nus else math.inf), r
-
-
 def mu_c_full_support(Ac, Bc):
-    """The smallest μ > 0 of the condensed pencil with an eigenvector x > 0 (y = 0: a
-    certified EiCP solution on the full support; its minimality is not proved)."""
+    """The smallest μ > 0 of the condensed pencil (``meicp.contact.instability.friction_pencils``)
+    with an eigenvector x > 0 (y = 0: a certified EiCP solution on the full support; its
+    minimality is not proved).  Solved in ν = 1/μ, whose second matrix −Ac is positive
+    definite (Bc is nearly singular)."""
     import scipy.linalg as sl
 
     nu, V = sl.eig(-Bc, -Ac)
@@ -286,44 +254,47 @@ def mu_c_full_support(Ac, Bc):
     return math.inf, math.nan
 
 
+#: μ_c methods: key -> (critical_friction keyword arguments, settings text)
+CF_VARIANTS = {
+    "critical_friction": ({"bisection": False}, "condensed enumeration, bisection=False"),
+    "critical_friction+check": ({}, "condensed enumeration + bisection check (the default at this size)"),
+    "critical_friction-uncondensed": ({"condense": False, "bisection": False},
+                                      "former path: whole reduced lattice per support, bisection=False"),
+}
+
+
 def mu_c_rows(cf_levels, enum_levels, full_levels):
+    """μ_c per level: critical_friction (condensed, no check) at enum_levels; with its check
+    and by its former uncondensed path at cf_levels; the full-support value at full_levels."""
     import meicp
+    from meicp.contact.instability import friction_pencils
 
     rows = []
     base = {"part": "convergence", "problem": "two-layer 4x4, slip+ base, mu=3", "quantity": "mu_c", "ranks": 1,
             "repeat": 0}
     for n in sorted(set(cf_levels) | set(enum_levels) | set(full_levels)):
         scene, geo = make_scene(n), geometry(n)
-        if n in cf_levels:
+        variants = (["critical_friction"] if n in enum_levels else []) + \
+            (["critical_friction+check", "critical_friction-uncondensed"] if n in cf_levels else [])
+        for m in variants:
+            kw, text = CF_VARIANTS[m]
             t0 = time.perf_counter()
-            v = meicp.critical_friction(scene)
-            rows.append({**base, **geo, "method": "critical_friction", "settings": "enumeration+bisection check",
-                         "wall_s": f"{time.perf_counter() - t0:.4f}", "status": "proved", "value": f"{v:.12g}",
-                         "complementarity": n + 1})
-        t0 = time.perf_counter()
-        Ac, Bc = condensed_pencil(scene)
-        t_cond = time.perf_counter() - t0
-        if n in enum_levels:
-            t0 = time.perf_counter()
-            v, r = mu_c_enumerated(Ac, Bc)
-            rows.append({**base, **geo, "method": "condensed-enumeration",
-                         "settings": f"supports={r.coverage.get('supports')}",
-                         "wall_s": f"{t_cond + time.perf_counter() - t0:.4f}", "iterations": r.coverage.get("supports"),
-                         "status": "proved" if r.success else r.status, "value": f"{v:.12g}",
-                         "complementarity": n + 1})
+            v = meicp.critical_friction(scene, **kw)
+            rows.append({**base, **geo, "method": m, "settings": text, "wall_s": f"{time.perf_counter() - t0:.4f}",
+                         "status": "proved", "value": f"{v:.12g}", "complementarity": n + 1,
+                         "iterations": 2 ** (n + 1)})
         if n in full_levels:
             t0 = time.perf_counter()
+            (Ac, Bc, _), = friction_pencils(scene)
             v, res = mu_c_full_support(Ac, Bc)
             rows.append({**base, **geo, "method": "condensed-full-support", "settings": f"residual={res:.1e}",
-                         "wall_s": f"{t_cond + time.perf_counter() - t0:.4f}", "status": "certified",
+                         "wall_s": f"{time.perf_counter() - t0:.4f}", "status": "certified",
                          "value": f"{v:.12g}", "complementarity": n + 1})
         print(f"  mu_c   n={n:4d} " + "  ".join(f"{r['method']} {float(r['value']):.10f} ({float(r['wall_s']):.2f} s)"
                                               for r in rows if r["n"] == n), flush=True)
-    # independent checks: each value against critical_friction / enumeration at the same n
+    # independent checks: each value against critical_friction (condensed) at the same n
     for r in rows:
         ref = [q for q in rows if q["n"] == r["n"] and q["method"] == "critical_friction"]
-        if not ref and r["method"] == "condensed-full-support":
-            ref = [q for q in rows if q["n"] == r["n"] and q["method"] == "condensed-enumeration"]
         if ref and ref[0] is not r:
             r["reference"] = ref[0]["value"]
             r["check_err"] = f"{abs(float(r['value']) - float(ref[0]['value'])) / float(ref[0]['value']):.3e}"
@@ -389,7 +360,9 @@ FEATURES = {
     "interface-stick": "base + frictional A/B interface, every pair sticking (nonsymmetric B)",
     "interface-slip": "base + frictional A/B interface, every pair slip+ at mu=0.3 (|J| doubles)",
     "static-states": "base states from the static frictional LCP (states='solve', top pushed (0.06,-0.1))",
-    "critical-friction": "meicp.critical_friction of the base scene (enumeration + bisection check)",
+    "critical-friction": "meicp.critical_friction of the base scene (condensed enumeration + bisection check)",
+    "critical-friction-nocheck": "meicp.critical_friction(bisection=False): the condensed enumeration alone",
+    "critical-friction-uncondensed": "critical_friction(condense=False, bisection=False): the former path",
 }
 
 
@@ -443,10 +416,12 @@ def run_feature(name, n):
     method = "enumerate" if name == "enumeration" else "active-set"
     rss0 = _reset_peak_rss()
     t0 = time.perf_counter()
-    if name == "critical-friction":
-        v = meicp.critical_friction(scene)
+    if name.startswith("critical-friction"):
+        v = meicp.critical_friction(scene, **{"critical-friction": {}, "critical-friction-nocheck": {"bisection": False},
+                                              "critical-friction-uncondensed": {"condense": False, "bisection": False}
+                                              }[name])
         wall = time.perf_counter() - t0
-        out = {"status": "solved", "value": v, "method": "critical_friction", "sizes": {}, "evidence": ""}
+        out = {"status": "solved", "value": v, "method": "critical_friction", "sizes": {}, "evidence": name}
     else:
         kw = {"target": SHIFT[n], "nev": 8} if method == "active-set" and SHIFT.get(n) else {}
         r = meicp.analyze(scene, method=method, **kw)
@@ -506,14 +481,15 @@ def main(argv=None) -> int:
         lam_levels, dense_r = [4, 8, 16, 32, 64], 600
         cf, enum, full, ctrl = [4, 6], [4, 6, 8, 10, 12], [4, 8, 16, 32, 64], [4, 8]
         repeats = args.repeats or 3
-        plan = [(8, k) for k in ("base", "enumeration", "grazing-1", "interface-slip", "static-states")]
+        plan = [(8, k) for k in ("base", "enumeration", "grazing-1", "interface-slip", "static-states",
+                                 "critical-friction-nocheck")]
     else:
         lam_levels, dense_r = [4, 8, 16, 32, 64, 128, 256, 512], 600
-        cf, enum, full = [4, 6, 8], [4, 6, 8, 10, 12, 14, 16, 18, 20], [4, 8, 16, 32, 64, 128, 256]
+        cf, enum, full = [4, 6, 8], [4, 6, 8, 10, 12, 14, 16, 18], [4, 8, 16, 32, 64, 128, 256]
         ctrl = [4, 8, 16]
         repeats = args.repeats or 5
         plan = [(8, k) for k in FEATURES] + [(BIG_N, k) for k in FEATURES
-                                             if k not in ("enumeration", "critical-friction")]
+                                             if k != "enumeration" and not k.startswith("critical-friction")]
     path = bench_csv.csv_path("resolution")
     rows = []
     if "convergence" in args.parts:

@@ -14,6 +14,16 @@
 ``critical_friction``: the smallest μ ≥ 0 at which a σ = 0 mode exists, with μ as the
 eigenvalue: at σ = 0, ``P̃(μ) K Q̃ x = y`` with ``P̃(μ) = P̃₀ + μ P̃₁`` is the EiCP
 ``(μ B′ − A′) x = y`` for ``A′ = −P̃₀ K Q̃``, ``B′ = P̃₁ K Q̃`` (B′ singular: only slip rows).
+The mass plays no role at σ = 0, and the rows E where w must vanish and B′ is zero (every
+non-complementarity row: B′ has only slip rows, which are in J) do not involve μ, so x_E is
+eliminated exactly, ``x_E = −A′_EE⁻¹ A′_EC x_C`` (C = the rest: J, plus any free row that
+carries μ), by one sparse LU of the μ-independent block; the condensed EiCP of order |C|
+(``Ac = A′_CC − A′_CE A′_EE⁻¹ A′_EC``, likewise ``Bc``) is enumerated in ν = 1/μ,
+``(ν(−Ac) − (−Bc)) x_C = ν y_C``: the pencil's second matrix ``−Ac`` is the Schur
+complement of ``−A′ = Q̃ᵀKQ̃``, positive definite unless a motion of zero stiffness exists
+(see ``critical_friction`` for that case), so its principal blocks are well conditioned,
+whereas ``Bc`` is typically nearly singular.  2^|J| solves of order ≤ |J| instead of
+order r: 254× faster at |J| = 9, r = 135 (docs/benchmarks.md, resolution section).
 """
 
 from __future__ import annotations
@@ -37,6 +47,18 @@ log = logging.getLogger("meicp")
 ENUMERATE_FLOPS = 2e9
 ENUMERATE_N = 600
 ENUMERATE_J = 16
+#: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
+#: complementarity DOFs (order ≤ |J|): 3.3 s at |J| = 17, 15 s at |J| = 19 (about ×2.2 per pair)
+CRITICAL_J = 20
+#: the μ-independent block −A′ (and its Schur complement) counts as singular beyond this
+#: condition number: a motion of (near) zero stiffness, μ_c undefined
+CRITICAL_COND = 1e12
+
+
+def _enumeration_is_small(r: int, n_j: int) -> bool:
+    """Whether 2^|J| dense eigen-solves of size r are within the enumeration budget
+    (``analyze``'s ``auto`` choice, and ``critical_friction``'s bisection check)."""
+    return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
 
 
 def _needs_static(scene) -> bool:
@@ -157,7 +179,7 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
     lam_min = 0.0 if solver.lam_min is None else solver.lam_min
     tol = solver.tol or 1e-10
     r = A.getSize()[0] if hasattr(A, "getSize") else A.shape[0]
-    small = r <= ENUMERATE_N and red.J.size <= ENUMERATE_J and 2.0 ** red.J.size * r ** 3 <= ENUMERATE_FLOPS
+    small = _enumeration_is_small(r, red.J.size)
     chosen = method if method not in (None, "auto") else ("enumerate" if small else "active-set")
     kwargs = dict(options)
     if chosen == "active-set":
@@ -247,17 +269,86 @@ def _mode(sol, red, sets) -> Mode:
                 {k: np.unique(v) for k, v in interface_support.items()})
 
 
-def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool = True, tol: float = 1e-8) -> float:
+def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
+                      condense: bool = True) -> float:
     """The smallest μ ≥ 0 at which a σ = 0 divergence mode exists for the scene's states
     (prescribed ones; with ``"solve"`` the states of the static equilibrium at the scene's μ),
     one μ for every frictional contact.  ``inf`` when there is none up to ``mu_max``.
 
-    Solved as an EiCP in μ by enumeration (small problems), cross-checked by bisection on
-    the existence of a σ ≥ 0 mode when ``bisection`` (raises ConvergenceError if the two
-    disagree).  Serial.
+    Solved as an EiCP in μ, condensed onto its complementarity DOFs (see the module
+    docstring) and enumerated: all 2^|J| supports of order ≤ |J|, a proof of the smallest μ,
+    for |J| ≤ ``CRITICAL_J`` (20) complementarity pairs per grazing case (ProblemError
+    beyond); the μ_c found is lifted back to the whole reduced lattice and certified there.
+    ``condense=False``: the former enumeration of the whole reduced pencil (order r per
+    support, at most 16 pairs and 600 reduced DOFs; slow, kept for cross-checks).
+
+    A motion of zero stiffness once the slip DOFs are eliminated — a floating body, or a
+    block free to slide as a whole — makes the μ-independent block singular.  If such a
+    motion is compatible with the slip directions (x_J ≥ 0) it is a σ = 0 motion at every μ
+    and μ_c is undefined: ProblemError.  If it is not (e.g. a layer between two sliding
+    contacts slipping in opposite directions), the enumeration meets singular pencils on
+    some supports, so the bisection check is then required (ProblemError if it is too large
+    for the default ``bisection=None``; a warning if ``bisection=False``).
+
+    ``bisection``: cross-check on the σ-problem with the mass (a σ ≥ 0 mode must exist just
+    above μ_c and none just below, each decided by enumerating the whole reduced pencil;
+    ConvergenceError if they disagree).  ``None`` (default): run it when that enumeration is
+    within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9 flops, about ≤ 10 pairs on
+    ~150 reduced DOFs), skip it beyond; ``True``: always; ``False``: never.  Serial.
     """
+    scene, model, sets = _friction_states(scene)
+    K, _ = assemble(model)
+    best = np.inf
+    small, singular = True, False
+    for case in grazing_cases(sets):
+        red = reduced_system(model, sets, case)
+        if red.J.size == 0:
+            continue
+        small = small and _enumeration_is_small(red.retained.size, red.J.size)
+        A1, B1 = _friction_pencil(K, red, sets)
+        if condense:
+            mu, sing = _smallest_mu_condensed(A1, B1, red.J, mu_max)
+            singular = singular or sing
+        else:
+            mu = _smallest_mu_full(A1, B1, red.J, mu_max)
+        best = min(best, mu)
+    if singular and bisection is None and not small:
+        raise ProblemError("critical_friction: a motion of zero stiffness is left once the slip DOFs are "
+                           "eliminated (not compatible with the slip directions), so the enumeration meets "
+                           "singular pencils and needs the bisection check, but the σ-problem is too large to "
+                           "enumerate; pass bisection=True to run it anyway, or hold the body")
+    if bisection or (bisection is None and small):
+        _check_by_bisection(scene, sets, model, best, mu_max, tol)
+    elif singular:
+        log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
+                    "certified but its minimality is not cross-checked", best)
+    elif bisection is None:
+        log.info("critical_friction: bisection check skipped (the σ-problem is too large to enumerate)")
+    return float(best)
+
+
+def friction_pencils(scene):
+    """The σ = 0 EiCPs in μ of :func:`critical_friction`, condensed onto the
+    complementarity DOFs: one ``(Ac, Bc, J)`` per grazing case with a complementarity pair,
+    for ``(μ Bc − Ac) x = y`` (dense, order |J|).  Raises ProblemError if the μ-independent
+    block is singular.  Serial."""
+    scene, model, sets = _friction_states(scene)
+    K, _ = assemble(model)
+    out = []
+    for case in grazing_cases(sets):
+        red = reduced_system(model, sets, case)
+        if red.J.size == 0:
+            continue
+        Ac, Bc, Jc, _, null = _condense(*_friction_pencil(K, red, sets), red.J)
+        if null.shape[1]:
+            raise ProblemError(_singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular"))
+        out.append((Ac, Bc, Jc))
+    return out
+
+
+def _friction_states(scene):
+    """(scene, model, contact sets) with the states resolved (static equilibrium if asked)."""
     from ..core.errors import ConvergenceError
-    from ..eicp.solve import solve_eicp
     from ..io.scene import Scene, load_scene
 
     if not isinstance(scene, Scene):
@@ -271,25 +362,127 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool = True, tol
         if not st.success:
             raise ConvergenceError(f"static equilibrium failed: {st.message}", st)
         override = {"base": st.states, **st.interface_states}
-    sets = contact_sets(scene, model, override)
-    K, _ = assemble(model)
-    best = np.inf
-    for case in grazing_cases(sets):
-        red = reduced_system(model, sets, case)
-        if red.J.size == 0:
-            continue
-        P0 = (red.P - _friction_part(red, sets)).tocsr()
-        A1 = -(P0 @ K @ red.Q).toarray()
-        B1 = (red.P_friction @ K @ red.Q).toarray()
-        if A1.shape[0] > ENUMERATE_N or red.J.size > ENUMERATE_J:
-            raise ProblemError(f"critical_friction enumerates: reduced size {A1.shape[0]} / |J| = {red.J.size} too large")
-        r = solve_eicp(A1, B1, J=red.J, method="enumerate", lam_min=0.0, tol=1e-9)
-        mus = [s.lam for s in r.solutions if 0.0 <= s.lam <= mu_max]
-        if mus:
-            best = min(best, min(mus))
-    if bisection:
-        _check_by_bisection(scene, sets, model, best, mu_max, tol)
-    return float(best)
+    return scene, model, contact_sets(scene, model, override)
+
+
+def _friction_pencil(K, red, sets):
+    """``A′ = −P̃₀ K Q̃``, ``B′ = P̃₁ K Q̃`` (sparse CSR) of the σ = 0 EiCP in μ."""
+    P0 = (red.P - _friction_part(red, sets)).tocsr()
+    return -(P0 @ K @ red.Q).tocsr(), (red.P_friction @ K @ red.Q).tocsr()
+
+
+def _smallest_mu_full(A1, B1, J, mu_max):
+    """The former path: enumerate the EiCP in μ on the whole reduced lattice."""
+    from ..eicp.solve import solve_eicp
+
+    if A1.shape[0] > ENUMERATE_N or J.size > ENUMERATE_J:
+        raise ProblemError(f"critical_friction(condense=False) enumerates the whole reduced lattice: reduced size "
+                           f"{A1.shape[0]} (limit {ENUMERATE_N}) / |J| = {J.size} (limit {ENUMERATE_J}) too large")
+    r = solve_eicp(A1.toarray(), B1.toarray(), J=J, method="enumerate", lam_min=0.0, tol=1e-9)
+    mus = [s.lam for s in r.solutions if 0.0 <= s.lam <= mu_max]
+    return min(mus) if mus else np.inf
+
+
+def _condense(A1, B1, J):
+    """Eliminate the rows/columns E where w = 0 and B′ = 0 (no μ in the equation):
+    ``x_E = −A′_EE⁻¹ A′_EC x_C``.  Returns ``(Ac, Bc, Jc, lift, null)``: Jc the positions of
+    J in C, ``lift(x_C)`` the whole reduced x, ``null`` an orthonormal basis (columns) of the
+    null space of −Ac (usually empty).  ProblemError if ``−A′_EE`` is singular: then a
+    motion with x_C = 0 costs no energy, a σ = 0 motion at every μ."""
+    import scipy.sparse.linalg as spl
+
+    r = A1.shape[0]
+    in_j = np.zeros(r, dtype=bool)
+    in_j[J] = True
+    with_mu = np.diff(B1.indptr) > 0           # rows of B′ with a stored entry
+    keep = in_j | with_mu                       # C: J and any free row that carries μ
+    C, E = np.flatnonzero(keep), np.flatnonzero(~keep)
+    Jc = np.flatnonzero(in_j[C])
+    A_CC, B_CC = A1[C][:, C].toarray(), B1[C][:, C].toarray()
+    if E.size:
+        A_EE = A1[E][:, E].tocsc()
+        singular = f"the μ-independent block −A′_EE ({E.size} DOFs) is singular"
+        try:
+            lu = spl.splu(A_EE)
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise ProblemError(_singular_message(singular)) from exc
+        inv = spl.LinearOperator(A_EE.shape, matvec=lu.solve, rmatvec=lambda v: lu.solve(v, trans="T"),
+                                 dtype=float)
+        cond = spl.norm(A_EE, 1) * spl.onenormest(inv)
+        if not np.isfinite(cond) or cond > CRITICAL_COND:
+            raise ProblemError(_singular_message(f"{singular} (condition ≈ {cond:.1e})"))
+        X_EC = lu.solve(A1[E][:, C].toarray())  # A′_EE⁻¹ A′_EC
+        Ac = A_CC - A1[C][:, E] @ X_EC
+        Bc = B_CC - B1[C][:, E] @ X_EC
+    else:
+        X_EC = np.zeros((0, C.size))
+        Ac, Bc = A_CC, B_CC
+    Ac, Bc = np.asarray(Ac), np.asarray(Bc)
+    # −Ac is the Schur complement of −A′ = Q̃ᵀKQ̃: symmetric positive semidefinite, definite
+    # unless a motion of zero stiffness is left (e.g. a layer sliding as a whole)
+    ev, V = np.linalg.eigh(-0.5 * (Ac + Ac.T))
+    null = V[:, ev <= max(ev[-1], 0.0) / CRITICAL_COND]
+
+    def lift(xc):
+        x = np.zeros(r)
+        x[C] = xc
+        x[E] = -X_EC @ xc
+        return x
+
+    return Ac, Bc, Jc, lift, null
+
+
+def _singular_message(what: str) -> str:
+    return (f"critical_friction: {what}: a motion of zero stiffness exists with the sliding contacts "
+            "held (a floating body, or a block free to slide as a whole), a σ = 0 motion at every μ; "
+            "μ_c is undefined — hold the body (boundary or sticking contacts)")
+
+
+def _sign_feasible(N: np.ndarray) -> bool:
+    """Whether some nonzero x = N c has x ≥ 0 (LP: N c ≥ 0, Σ(N c) = 1), or x = 0 on these
+    rows for some c ≠ 0 (N rank deficient)."""
+    from scipy.optimize import linprog
+
+    if np.linalg.matrix_rank(N) < N.shape[1]:
+        return True
+    res = linprog(np.zeros(N.shape[1]), A_ub=-N, b_ub=np.zeros(N.shape[0]), A_eq=N.sum(axis=0)[None, :],
+                  b_eq=[1.0], bounds=[(None, None)] * N.shape[1], method="highs")
+    return res.status == 0
+
+
+def _smallest_mu_condensed(A1, B1, J, mu_max):
+    """Smallest μ in [0, mu_max] of ``(μB′ − A′)x = y`` by enumerating the condensed EiCP
+    in ν = 1/μ, certified on the whole reduced pencil.  Returns (μ, singular): ``singular``
+    when −Ac has a null space that is not sign-feasible (the enumeration met singular
+    pencils; the caller must cross-check)."""
+    from ..core.errors import ConvergenceError
+    from ..eicp.problem import EiCPProblem, certify_pair
+    from ..eicp.solve import solve_eicp
+
+    if J.size > CRITICAL_J:
+        raise ProblemError(f"critical_friction enumerates all 2^|J| supports of the EiCP condensed onto the "
+                           f"contact DOFs: |J| = {J.size} complementarity pairs (slipping or grazing contacts) "
+                           f"exceeds the limit CRITICAL_J = {CRITICAL_J}")
+    Ac, Bc, Jc, lift, null = _condense(A1, B1, J)
+    if null.shape[1] and _sign_feasible(null[Jc]):
+        raise ProblemError(_singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular and its "
+                                             "null space holds a motion with x_J ≥ 0"))
+    if Ac.shape[0] > Jc.size:
+        log.info("critical_friction: %d free rows carry μ and stay in the condensed EiCP", Ac.shape[0] - Jc.size)
+    # μ > 0 ⇔ ν = 1/μ > 0.  μ = 0 is never a solution: −Ac is positive semidefinite and
+    # x_J ≥ 0 with xᵀ(−Ac)x = xᵀy = 0 only for x in its null space, excluded just above
+    r = solve_eicp(-Bc, -Ac, J=Jc, method="enumerate", lam_min=1.0 / mu_max if mu_max > 0 else np.inf,
+                   tol=1e-9)
+    nus = [s for s in r.solutions if s.lam > 0 and 1.0 / s.lam <= mu_max]
+    if not nus:
+        return np.inf, bool(null.shape[1])
+    sol = max(nus, key=lambda s: s.lam)
+    mu = 1.0 / sol.lam
+    full = certify_pair(EiCPProblem.from_data(A1, B1, J), mu, lift(sol.x))
+    if full.residual > 1e-9:
+        raise ConvergenceError(f"critical_friction: μ_c = {mu:.10g} of the condensed EiCP fails the certificate on "
+                               f"the whole reduced lattice (residual {full.residual:.1e})", r)
+    return mu, bool(null.shape[1])
 
 
 def _friction_part(red, sets):
