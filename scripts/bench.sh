@@ -76,9 +76,15 @@ if wanted tradeoff; then begin tradeoff
 if wanted scaling; then begin scaling
     # serial run: meicp stages on 1 rank + the peers (ARPACK+SuperLU, Siconos, enumeration);
     # then 2 ranks, appended (keeps the 1-rank rows)
+    # (each also runs the multi-support family J = xy); MUMPS orderings into scaling_ordering.csv:
+    # quick 10^4 DOFs; full only with SCALING_ORDERINGS=1 (7 more minutes: 3·10^5 and 10^6)
     if [[ $mode == quick ]]; then q=(--quick); else q=(); fi
     run "$PY" scripts/bench_scaling.py "${q[@]}"
     run "${MPI[@]}" "$PY" scripts/bench_scaling.py "${q[@]}"
+    if [[ $mode == quick || ${SCALING_ORDERINGS:-0} == 1 ]]; then
+        run "$PY" scripts/bench_scaling.py --orderings "${q[@]}"
+        run "${MPI[@]}" "$PY" scripts/bench_scaling.py --orderings "${q[@]}"
+    fi
     chart scaling; end scaling; fi
 
 # === failure: where each method fails (issue 7 §4) ===

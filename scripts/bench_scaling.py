@@ -10,6 +10,10 @@ Commands that produce the committed ``docs/benchmarks/scaling.csv`` (``scripts/b
     .venv/bin/python scripts/charts.py scaling docs/benchmarks/scaling.csv
     # quick mode (build/benchmarks/): the same with --quick (10^4 and 3·10^4 DOFs only)
 
+    # MUMPS orderings (docs/benchmarks/scaling_ordering.csv; SCALING_ORDERINGS=1 scripts/bench.sh full)
+    .venv/bin/python scripts/bench_scaling.py --orderings                    # 3·10^5 (3 repeats), 10^6 (2)
+    mpirun -n 2 --oversubscribe .venv/bin/python scripts/bench_scaling.py --orderings   # appends
+
 Problem ("lattice family"): nx × ny nodes with nx = 2·ny (10^6 DOFs: 1000 × 500, the lattice
 of ``data/scenes/extensive_contact.toml``), a soft layer (k = 1, ρ = 1) under a stiff one
 (k = 5, ρ = 2), top row fixed, every base node in contact with the rigid rough base and
@@ -35,6 +39,25 @@ was descheduled — the machine is shared); ``load1``: the 1-minute load average
 
 ``above_base_mb``: ``peak_rss_mb`` minus the resident set of the process after importing
 meicp, PETSc and SLEPc (about 100 MB), i.e. what the problem itself uses.
+
+``setup_s`` (eigen-solve rows): the time of ``EPSSetUp`` alone, i.e. MUMPS' analysis and
+numeric factorisation; the rest of ``wall_s`` is the Krylov–Schur iterations (triangular solves).
+
+Multi-support family (``xy-eigensolve`` and ``xy-meicp`` stages, ``--xy`` sizes, default the
+same as ``--dofs``): the symmetric pencil of ``bench_eicp.py lattice --dofs xy`` (A = −K_ff,
+B = M_ff of an nx × nx/2 two-layer lattice with the bottom and top rows fixed; J = the x and
+y DOFs of the lowest free row, |J| = 2·nx): ``solve_eicp(..., method="active-set")`` has to
+drop and re-add indices, so ``iterations``, ``eigen_solves`` and ``supports`` (supports
+visited) are measured against size, next to one eigen-solve of the same pencil (GHEP, the
+active-set's own options: target 0 in real part, tol 1e-12).
+
+MUMPS orderings (``--orderings [NAME ...]``, its own CSV ``scaling_ordering.csv``): one
+eigen-solve of the main pencil at 3·10^5 and 10^6 DOFs per fill-reducing ordering
+(``auto`` = MUMPS' default ICNTL(7) = 7, ``amd`` 0, ``amf`` 2; also ``qamd`` 6, ``pord`` 4),
+interleaved and rotated per repeat, with the ordering MUMPS actually used (INFOG(7)), the
+factor's entries (INFOG(29)) and flops (RINFOG(3)); first an availability check of METIS
+(ICNTL(7) = 5), SCOTCH (3) and, on several ranks, the parallel analysis ICNTL(28) = 2 with
+PT-Scotch or ParMETIS (ICNTL(29) = 1, 2).
 
 Peers (1 rank only, on the same pencil or LCP, in the same process and run):
 
@@ -73,7 +96,15 @@ import bench_csv  # noqa: E402
 
 FIELDS = ["problem", "stage", "method", "settings", "ranks", "dofs", "nx", "ny", "J", "n", "repeats",
           "wall_s", "wall_min_s", "wall_max_s", "iterations", "eigen_solves", "status", "error",
-          "peak_rss_mb", "total_rss_mb", "above_base_mb", "cpu_frac", "load1", "lam", "residual", "detail"]
+          "peak_rss_mb", "total_rss_mb", "above_base_mb", "cpu_frac", "load1", "lam", "residual", "detail",
+          "supports", "setup_s"]
+ORDER_FIELDS = ["problem", "stage", "method", "settings", "ordering", "ordering_used", "ranks", "dofs", "n",
+                "repeats", "wall_s", "wall_min_s", "wall_max_s", "setup_s", "iterations", "status", "error",
+                "factor_entries", "flops", "peak_rss_mb", "above_base_mb", "cpu_frac", "load1", "lam", "detail"]
+# MUMPS ICNTL(7) sequential orderings (Debian's MUMPS 5.5 has PORD, AMD, AMF, QAMD; METIS and
+# SCOTCH requests fall back to PORD) and ICNTL(28) = 2 parallel ordering (none available)
+ORDERINGS = {"auto": None, "amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6}
+MUMPS_ORDER_NAME = {0: "AMD", 2: "AMF", 3: "SCOTCH", 4: "PORD", 5: "METIS", 6: "QAMD", 7: "auto"}
 FULL_DOFS = (10_000, 30_000, 100_000, 300_000, 1_000_000)
 QUICK_DOFS = (10_000, 30_000)
 MU = 2.0
@@ -171,8 +202,13 @@ def build_pencil(model, scene, K, M, comm):
     return A, B, red.J
 
 
-def slepc_eigs(A, B, nev, comm):
-    """One shift-and-invert Krylov–Schur solve (MUMPS), nev nearest 0 in modulus."""
+def slepc_eigs(A, B, nev, comm, extra=None, info=None, hermitian=False):
+    """One shift-and-invert Krylov–Schur solve (MUMPS), nev nearest 0 in modulus (GNHEP) or in
+    real part (``hermitian``: GHEP, the options of the active-set's own solves).  ``extra``:
+    more options under the solve's prefix (e.g. ``st_mat_mumps_icntl_7``).  ``info`` (a dict)
+    receives ``setup_s`` (EPSSetUp: MUMPS analysis and factorisation, this rank's wall time),
+    and the factor's MUMPS ``ordering_used`` (INFOG(7)), ``factor_entries`` (INFOG(29)) and
+    ``flops`` (RINFOG(3), elimination)."""
     from meicp.petsc import import_slepc
     from meicp.petsc.options import OptionsScope
 
@@ -180,16 +216,34 @@ def slepc_eigs(A, B, nev, comm):
     opts = {"eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True, "eps_tol": 1e-10,
             "eps_gen_non_hermitian": True, "st_type": "sinvert", "st_ksp_type": "preonly",
             "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps"}
+    if hermitian:
+        del opts["eps_target_magnitude"], opts["eps_gen_non_hermitian"]
+        opts.update(eps_target_real=True, eps_gen_hermitian=True, eps_tol=1e-12)
+    opts.update(extra or {})
     eps = SLEPc.EPS().create(comm=A.getComm())
     try:
         eps.setOperators(A, B)
         with OptionsScope("bench_scaling_", opts):
             eps.setOptionsPrefix("bench_scaling_")
             eps.setFromOptions()
+            t0 = time.perf_counter()
+            eps.setUp()
+            setup = time.perf_counter() - t0
             eps.solve()
         nconv = eps.getConverged()
         vals = np.array([eps.getEigenvalue(i) for i in range(min(nconv, nev))], dtype=complex)
         its = eps.getIterationNumber()
+        if info is not None:
+            info["setup_s"] = setup
+            try:
+                F = eps.getST().getKSP().getPC().getFactorMatrix()
+                info["ordering_used"] = MUMPS_ORDER_NAME.get(F.getMumpsInfog(7), str(F.getMumpsInfog(7)))
+                entries = F.getMumpsInfog(29)  # negative: millions of entries
+                info["factor_entries"] = entries if entries >= 0 else -entries * 1_000_000
+                info["flops"] = F.getMumpsRinfog(3)
+                F.destroy()  # drops this reference (without it the factor outlives the EPS)
+            except Exception as e:  # noqa: BLE001 (diagnostics only)
+                info["ordering_used"] = f"? ({type(e).__name__})"
     finally:
         eps.destroy()
     return vals, its
@@ -301,11 +355,21 @@ class Runner:
             from meicp.petsc.mat import mat_from_scipy
 
             Ap, Bp = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
-        (vals, its), walls, peak, total = self.timed(reps, lambda: slepc_eigs(Ap, Bp, args.nev, comm))
+        infos = []
+
+        def eig():
+            infos.append({})
+            return slepc_eigs(Ap, Bp, args.nev, comm, info=infos[-1])
+
+        (vals, its), walls, peak, total = self.timed(reps, eig)
         slepc_vals, slepc_wall = vals, statistics.median(walls)
         self.row(**common, stage="eigensolve", method="slepc-krylovschur+mumps", iterations=its,
                  eigen_solves=1, settings=f"sinvert target=0 (magnitude) nev={args.nev} tol=1e-10",
                  status="solved" if vals.size >= args.nev else "not_converged", lam=fmt_vals(vals),
+                 setup_s=f"{statistics.median(i['setup_s'] for i in infos):.4g}",
+                 detail=f"setup_s = EPSSetUp (MUMPS analysis + factorisation, rank 0); ordering "
+                        f"{infos[-1].get('ordering_used')}, factor entries {infos[-1].get('factor_entries')}, "
+                        f"flops {infos[-1].get('flops', float('nan')):.3g}",
                  peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
         if Ap is not A:
             Ap.destroy()
@@ -470,6 +534,169 @@ class Runner:
                      total_rss_mb=st.total)
 
 
+    # -- multi-support family: J = x and y DOFs of the lowest free row ----------------------
+    def xy(self, dofs):
+        """The symmetric lattice pencil of ``bench_eicp.py lattice --dofs xy`` (A = −K_ff,
+        B = M_ff, bottom and top rows fixed, J = both DOFs of the lowest free row): the
+        active-set leaves and re-enters supports, so its iterations are measured against one
+        eigen-solve of the same pencil (GHEP, the active-set's own SLEPc options)."""
+        import bench_eicp
+        from meicp.eicp.solve import solve_eicp
+
+        comm, args = self.comm, self.args
+        nx = 2 * round(math.sqrt(dofs) / 2)
+        A, B, J = bench_eicp.lattice_pencil(nx, comm, "xy")
+        n = A.getSize()[0]
+        reps = args.repeats if nx * nx <= args.repeat_max_dofs else 1
+        common = dict(problem=f"lattice_xy_{nx}x{nx // 2}", dofs=nx * (nx // 2) * 2, nx=nx, ny=nx // 2,
+                      J=J.size, n=n, repeats=reps)
+        self.say(f"\nlattice_xy_{nx}x{nx // 2} (J = x, y of the lowest free row): n = {n}, |J| = {J.size}, "
+                 f"{comm.size} rank(s), {reps} repeat(s)")
+
+        def stat(walls):
+            return dict(wall_s=statistics.median(walls), wall_min_s=min(walls), wall_max_s=max(walls),
+                        cpu_frac=min(self.cpu), load1=max(self.load))
+
+        infos = []
+
+        def eig():
+            infos.append({})
+            return slepc_eigs(A, B, args.nev, comm, info=infos[-1], hermitian=True)
+
+        (vals, its), walls, peak, total = self.timed(reps, eig)
+        t_single = statistics.median(walls)
+        self.row(**common, stage="xy-eigensolve", method="slepc-krylovschur+mumps", iterations=its, eigen_solves=1,
+                 settings=f"GHEP sinvert target=0 (real) nev={args.nev} tol=1e-12", lam=fmt_vals(vals),
+                 status="solved" if vals.size >= args.nev else "not_converged",
+                 setup_s=f"{statistics.median(i['setup_s'] for i in infos):.4g}",
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        r, walls, peak, total = self.timed(reps, lambda: solve_eicp(A, B, J=J, method="active-set", target=0.0,
+                                                                    nev=args.nev, tol=1e-10))
+        sol = r.solutions[0] if r.solutions else None
+        cov = r.coverage
+        hist = cov.get("history", [])
+        self.row(**common, stage="xy-meicp", method="active-set", settings=f"target=0 nev={args.nev} tol=1e-10",
+                 iterations=r.iterations, eigen_solves=cov.get("eigen_solves", ""),
+                 supports=cov.get("supports_visited", ""), status=r.status,
+                 lam=f"{sol.lam:.10g}" if sol else "", residual=sol.residual if sol else "",
+                 detail=(f"time / one eigen-solve = {statistics.median(walls) / t_single:.2f}; EPS iterations "
+                         f"{cov.get('eps_iterations')}; |S| per iteration "
+                         + " ".join(str(h.get("support")) for h in hist)
+                         + "; seconds per eigen-solve " + " ".join(f"{h.get('seconds', 0):.3g}" for h in hist)),
+                 peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
+        A.destroy()
+        B.destroy()
+        del A, B
+        release_memory()
+
+    # -- MUMPS fill-reducing orderings on the main family's eigen-solve --------------------
+    def orderings(self, dofs, names, reps):
+        """One eigen-solve of the main pencil per MUMPS ordering, interleaved (rep-major,
+        the order rotated each repeat) so that every ordering sees the same machine state."""
+        import meicp
+        from meicp.lattice.model import LatticeModel
+        from meicp.petsc.mat import mat_from_scipy
+
+        comm, args = self.comm, self.args
+        nx, ny = lattice_shape(dofs)
+        scene = make_scene(nx, ny)
+        model = LatticeModel(scene)
+        K, M = meicp.assemble(model, comm if comm.size > 1 else None)
+        A, B, _ = build_pencil(model, scene, K, M, comm)
+        if not hasattr(A, "getSize"):
+            A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
+        n = A.getSize()[0]
+        self.say(f"\norderings on lattice_{nx}x{ny}: n = {n}, {comm.size} rank(s), {reps} repeat(s): {names}")
+        res = {k: dict(walls=[], setups=[], cpu=[], load=[], peak=0.0) for k in names}
+        info = {}
+        for rep in range(reps):
+            order = names[rep % len(names):] + names[:rep % len(names)]
+            for name in order:
+                code = ORDERINGS[name]
+                extra = {} if code is None else {"st_mat_mumps_icntl_7": code}
+                info[name] = {}
+                with Stage(comm) as st:
+                    vals, its = slepc_eigs(A, B, args.nev, comm, extra=extra, info=info[name])
+                d = res[name]
+                d["walls"].append(st.wall)
+                d["setups"].append(comm.allreduce(info[name]["setup_s"], op=__import__("mpi4py.MPI").MPI.MAX))
+                d["cpu"].append(st.cpu_frac)
+                d["load"].append(st.load1)
+                d["peak"] = max(d["peak"], st.peak)
+                d["vals"], d["its"] = vals, its
+                self.say(f"  rep {rep} {name:<6} {st.wall:8.3f} s (setup {d['setups'][-1]:.3f} s, "
+                         f"ordering used {info[name].get('ordering_used')}, cpu {st.cpu_frac:.2f})")
+        ref = res[names[0]]["vals"]
+        rows = []
+        for name in names:
+            d, i = res[name], info[name]
+            code = ORDERINGS[name]
+            used = i.get("ordering_used", "")
+            fell = code is not None and MUMPS_ORDER_NAME.get(code) != used
+            rows.append(dict(
+                problem=f"lattice_{nx}x{ny}", stage="eigensolve", method="slepc-krylovschur+mumps",
+                settings=("ICNTL(7) default (7 = automatic choice)" if code is None else f"ICNTL(7)={code}")
+                + f" sinvert target=0 nev={args.nev} tol=1e-10", ordering=name, ordering_used=used,
+                ranks=comm.size, dofs=model.n_dofs, n=n, repeats=reps,
+                wall_s=f"{statistics.median(d['walls']):.4g}", wall_min_s=f"{min(d['walls']):.4g}",
+                wall_max_s=f"{max(d['walls']):.4g}", setup_s=f"{statistics.median(d['setups']):.4g}",
+                iterations=d["its"], status="solved (fell back to " + used + ")" if fell else "solved",
+                error=f"{max(match_error(ref, d['vals']), match_error(d['vals'], ref)):.3g}",
+                factor_entries=i.get("factor_entries", ""), flops=f"{i.get('flops', float('nan')):.4g}",
+                peak_rss_mb=f"{d['peak']:.0f}", above_base_mb=f"{d['peak'] - self.base_mb:.0f}",
+                cpu_frac=f"{min(d['cpu']):.2f}", load1=f"{max(d['load']):.2f}", lam=fmt_vals(d["vals"]),
+                detail=f"error = eigenvalue disagreement with {names[0]}; setup_s = EPSSetUp (analysis + "
+                       "factorisation), max over ranks; factor entries INFOG(29), flops RINFOG(3)"))
+        for x in (A, B, K, M):
+            if hasattr(x, "destroy"):
+                x.destroy()
+        del A, B, K, M
+        release_memory()
+        return rows
+
+    def ordering_availability(self):
+        """Which of the orderings this MUMPS lacks, on a 10^4-DOF pencil: METIS and SCOTCH
+        (ICNTL(7) = 5, 3: MUMPS falls back to its default, seen in INFOG(7)) and, on several
+        ranks, the parallel analysis ICNTL(28) = 2 with ICNTL(29) = 1 (PT-Scotch) or 2
+        (ParMETIS) (MUMPS stops with INFOG(1) = −38 without the tool)."""
+        import meicp
+        from meicp.lattice.model import LatticeModel
+        from meicp.petsc.mat import mat_from_scipy
+
+        comm, rows = self.comm, []
+        nx, ny = lattice_shape(10_000)
+        scene = make_scene(nx, ny)
+        model = LatticeModel(scene)
+        K, M = meicp.assemble(model, comm if comm.size > 1 else None)
+        A, B, _ = build_pencil(model, scene, K, M, comm)
+        if not hasattr(A, "getSize"):
+            A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
+        checks = [("metis", "ICNTL(7)=5", {"st_mat_mumps_icntl_7": 5}),
+                  ("scotch", "ICNTL(7)=3", {"st_mat_mumps_icntl_7": 3})]
+        if comm.size > 1:
+            checks += [("pt-scotch", "ICNTL(28)=2 ICNTL(29)=1", {"st_mat_mumps_icntl_28": 2, "st_mat_mumps_icntl_29": 1}),
+                       ("parmetis", "ICNTL(28)=2 ICNTL(29)=2", {"st_mat_mumps_icntl_28": 2, "st_mat_mumps_icntl_29": 2})]
+        for name, settings, extra in checks:
+            info = {}
+            t0 = time.perf_counter()
+            try:
+                slepc_eigs(A, B, self.args.nev, comm, info=info, extra=extra)
+                used = info.get("ordering_used", "")
+                status = "available" if used.lower() == name else f"not available: fell back to {used}"
+            except Exception as e:  # noqa: BLE001
+                status = f"not available: MUMPS analysis failed ({str(e).splitlines()[0][:40]})"
+            rows.append(dict(problem=f"lattice_{nx}x{ny}", stage="availability", method="slepc-krylovschur+mumps",
+                             settings=settings, ordering=name, ordering_used=info.get("ordering_used", ""),
+                             ranks=comm.size, dofs=model.n_dofs, n=A.getSize()[0], repeats=1,
+                             wall_s=f"{time.perf_counter() - t0:.4g}", status=status,
+                             detail="availability check of the ordering in this MUMPS build"))
+            self.say(f"  {name} ({settings}): {status}")
+        for x in (A, B, K, M):
+            if hasattr(x, "destroy"):
+                x.destroy()
+        return rows
+
+
 class _Serial:
     size, rank = 1, 0
 
@@ -491,8 +718,18 @@ def main():
     p.add_argument("--repeat-max-dofs", type=int, default=100_000)
     p.add_argument("--peer-limit", type=float, default=180.0, help="skip ARPACK above this predicted time [s]")
     p.add_argument("--lcp-max-dofs", type=int, default=100_000, help="largest lattice for the condensed LCP peer")
+    p.add_argument("--xy", nargs="*", type=int,
+                   help="sizes of the multi-support (J = xy) family (default: the same as --dofs)")
+    p.add_argument("--orderings", nargs="*", metavar="NAME",
+                   help=f"instead of everything else: one eigen-solve per MUMPS ordering ({', '.join(ORDERINGS)}; "
+                        "default auto amd amf) at --dofs (default 300000 1000000), into scaling_ordering.csv")
+    p.add_argument("--ordering-repeats", nargs="+", type=int, default=[3, 2],
+                   help="repeats per size of --orderings (the last value for the remaining sizes)")
     args = p.parse_args()
+    if args.orderings is not None:
+        return main_orderings(args)
     dofs = args.dofs or (QUICK_DOFS if args.quick else FULL_DOFS)
+    xy = args.xy if args.xy is not None else dofs
     tiny = args.tiny if args.tiny is not None else ([6, 8] if args.quick else [6, 8, 10, 12])
     from mpi4py import MPI
 
@@ -503,11 +740,32 @@ def main():
         run.tiny(nx)
     for d in dofs:
         run.lattice(d)
+    for d in xy:
+        run.xy(d)
     if comm.rank == 0:
         out = bench_csv.csv_path("scaling")
         mine = str(comm.size)
         bench_csv.write_rows(out, run.rows, FIELDS, keep=lambda r: r["ranks"] != mine)
         print(f"\nwrote {len(run.rows)} rows ({comm.size} rank(s)) to {out} in {time.perf_counter() - t0:.0f} s")
+
+
+def main_orderings(args):
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    names = args.orderings or ["auto", "amd", "amf"]
+    dofs = args.dofs or ((10_000,) if args.quick else (300_000, 1_000_000))
+    run = Runner(args, comm)
+    t0 = time.perf_counter()
+    rows = run.ordering_availability()
+    for k, d in enumerate(dofs):
+        reps = args.ordering_repeats[min(k, len(args.ordering_repeats) - 1)]
+        rows += run.orderings(d, names, reps)
+    if comm.rank == 0:
+        out = bench_csv.csv_path("scaling_ordering")
+        mine = str(comm.size)
+        bench_csv.write_rows(out, rows, ORDER_FIELDS, keep=lambda r: r["ranks"] != mine)
+        print(f"\nwrote {len(rows)} rows ({comm.size} rank(s)) to {out} in {time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":

@@ -320,7 +320,8 @@ def _scaling_slope(pts, min_x=9e4):
 def chart_scaling(path):
     """Scaling (scripts/bench_scaling.py): time per stage against DOFs with the peers
     (scaling_time.png), peak memory per rank (scaling_memory.png), speedup and parallel
-    efficiency 1 → 2 ranks (scaling_speedup.png); log-log slopes fitted from 10^5 DOFs up."""
+    efficiency 1 → 2 ranks (scaling_speedup.png), the multi-support family's active-set
+    against one eigen-solve (scaling_activeset.png); log-log slopes fitted from 10^5 DOFs up."""
     rows = read(path)
     out = Path(path).with_suffix("")
     ok = [r for r in rows if r["wall_s"] and r["status"].split()[0] in ("ok", "solved")]
@@ -353,6 +354,14 @@ def chart_scaling(path):
         for ranks, ls, mk in ((1, "-", "o"), (2, "--", "s")):
             draw(ax, (stage, method, ranks), label, colour[stage], ls, mk)
     draw(ax, ("eigensolve", "arpack+superlu", 1), "peer: one eigen-solve, SciPy ARPACK + SuperLU", "k", ":", "D")
+    for ranks, mk in ((1, "o"), (2, "s")):  # of which: MUMPS analysis + factorisation (EPSSetUp)
+        pts = sorted((int(r["dofs"]), float(r["setup_s"])) for r in ok if r.get("setup_s") and r["stage"] == "eigensolve"
+                     and r["ranks"] == str(ranks) and int(r["dofs"]) >= main)
+        if pts:
+            s = _scaling_slope(pts)
+            ax.loglog(*zip(*pts), ls=":", marker=mk, mfc="none", color="C2", ms=5,
+                      label=f"  of which MUMPS analysis + factorisation ({ranks} rank{'s' if ranks > 1 else ''})"
+                            + (f", slope {s:.2f}" if s is not None else ""))
     ax.set(xlabel="DOFs of the lattice", ylabel="wall time, median [s]",
            title="two-layer lattice on a sliding base (μ = 2): time per stage\n"
                  "solid 1 rank, dashed 2 ranks; slopes = log-log fit from 10^5 DOFs up")
@@ -404,19 +413,26 @@ def chart_scaling(path):
              ("pencil", "meicp-scipy", "meicp-petsc", "reduced pencil (SciPy → PETSc products)"),
              ("eigensolve", "slepc-krylovschur+mumps", None, "one eigen-solve, SLEPc + MUMPS"),
              ("meicp", "active-set", None, "MEiCP active-set"),
-             ("analyze", "meicp-analyze", None, "analyze, end to end")]
+             ("analyze", "meicp-analyze", None, "analyze, end to end"),
+             ("xy-eigensolve", "slepc-krylovschur+mumps", None, "one eigen-solve, J = xy pencil (GHEP)"),
+             ("xy-meicp", "active-set", None, "EiCP active-set, J = xy (3 supports)")]
+    colour = dict(colour, **{"xy-eigensolve": "C2", "xy-meicp": "C3"})
+    marked = False
     for stage, m1, m2, label in pairs:
         one = {d: t for d, t, _ in series.get((stage, m1, 1), []) if d >= main}
         two = {d: t for d, t, _ in series.get((stage, m2 or m1, 2), []) if d >= main}
         ds = sorted(set(one) & set(two))
         if ds:
-            ax.semilogx(ds, [one[d] / two[d] for d in ds], marker="o", color=colour[stage], label=label)
+            ax.semilogx(ds, [one[d] / two[d] for d in ds], marker="^" if stage.startswith("xy") else "o",
+                        ls=":" if stage.startswith("xy") else "-", color=colour[stage], label=label)
             # runs that did not get their cores: CPU time / wall time below 0.9 on some rank
             cpu = {(r["method"], int(r["ranks"]), int(r["dofs"])): r.get("cpu_frac") or "1" for r in ok
                    if r["stage"] == stage}
             bad = [d for d in ds if min(float(cpu.get((m1, 1, d), 1)), float(cpu.get((m2 or m1, 2, d), 1))) < 0.9]
-            ax.plot(bad, [one[d] / two[d] for d in bad], "o", ms=13, mfc="none", mec="0.3", mew=1.5,
-                    label="descheduled: CPU/wall < 0.9 on a rank" if stage == "analyze" else None)
+            if bad:
+                ax.plot(bad, [one[d] / two[d] for d in bad], "o", ms=13, mfc="none", mec="0.3", mew=1.5,
+                        label=None if marked else "descheduled: CPU/wall < 0.9 on a rank")
+                marked = True
     ax.axhline(2, color="k", ls=":", lw=1)
     ax.axhline(1, color="0.5", ls="--", lw=1)
     ax.text(1.1e4, 2.03, "ideal on 2 ranks (efficiency 1)", fontsize=8)
@@ -431,6 +447,52 @@ def chart_scaling(path):
     fig.savefig(f"{out}_speedup.png", dpi=110)
     plt.close(fig)
     print(f"wrote {out}_time.png, {out}_memory.png, {out}_speedup.png")
+    _chart_scaling_xy(rows, out)
+
+
+def _chart_scaling_xy(rows, out):
+    """scaling_activeset.png: the multi-support family (J = x, y of the lowest free row):
+    active-set time and one eigen-solve against DOFs, 1 and 2 ranks, with the supports
+    visited; right: active-set time / one eigen-solve."""
+    xy = [r for r in rows if r["stage"] in ("xy-eigensolve", "xy-meicp") and r["wall_s"]]
+    if not xy:
+        return
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(15, 6.5))
+    single = {(int(r["ranks"]), int(r["dofs"])): float(r["wall_s"]) for r in xy if r["stage"] == "xy-eigensolve"}
+    for ranks, ls, mk in ((1, "-", "o"), (2, "--", "s")):
+        rk = f"{ranks} rank{'s' if ranks > 1 else ''}"
+        for stage, c, label in (("xy-eigensolve", "C2", "one eigen-solve (GHEP, SLEPc + MUMPS)"),
+                                ("xy-meicp", "C3", "EiCP active-set (solve_eicp)")):
+            pts = sorted((int(r["dofs"]), float(r["wall_s"]), r) for r in xy if r["stage"] == stage
+                         and r["ranks"] == str(ranks))
+            if not pts:
+                continue
+            sl = _scaling_slope([p[:2] for p in pts])
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], ls=ls, marker=mk, color=c, ms=5,
+                      label=f"{label}, {rk}" + (f", slope {sl:.2f}" if sl is not None else ""))
+            if stage == "xy-meicp":
+                for d, t, r in pts:
+                    if ranks == 1:
+                        ax.annotate(f"{r['supports']} supports,\n{r['eigen_solves']} solves", (d, t),
+                                    textcoords="offset points", xytext=(6, -22), ha="left", fontsize=7, color="C3")
+                ratio = [(d, t / single[(ranks, d)]) for d, t, _ in pts if (ranks, d) in single]
+                if ratio:
+                    bx.semilogx(*zip(*ratio), ls=ls, marker=mk, color="C3", label=f"active-set / one eigen-solve, {rk}")
+    ax.set(xlabel="DOFs of the lattice", ylabel="wall time, median [s]",
+           title="multi-support EiCP (J = x and y DOFs of the lowest free row, |J| = 2·nx):\n"
+                 "active-set against one eigen-solve; slopes from 10^5 DOFs up")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    bx.axhline(1, color="0.5", ls=":", lw=1)
+    bx.set(xlabel="DOFs of the lattice", ylabel="active-set time / time of one eigen-solve", ylim=(0, None),
+           title="cost of the active-set search in units of one eigen-solve\n"
+                 "(later solves restart from the last eigenvector, reuse the symbolic LU)")
+    bx.grid(True, which="both", alpha=0.3)
+    bx.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(f"{out}_activeset.png", dpi=110)
+    plt.close(fig)
+    print(f"wrote {out}_activeset.png")
 
 
 # --- failure map (bench_failure.py) ---
@@ -547,7 +609,7 @@ def chart_resolution(path):
         fig, axes = plt.subplots(1, 3, figsize=(18, 5.2))
         ax = axes[0]
         lim = next((r for r in conv if r["quantity"] == "mu_c_limit"), None)
-        styles = {"critical_friction": ("s", "C3", 9), "condensed-enumeration": ("o", "C0", 6),
+        styles = {"critical_friction-uncondensed": ("s", "C3", 10), "critical_friction": ("o", "C0", 6),
                   "condensed-full-support": ("^", "C2", 6)}
         if lim and lim["status"] == "converges":
             limit, p = float(lim["value"]), float(lim["order"])
@@ -555,9 +617,10 @@ def chart_resolution(path):
                 pts = sorted((int(r["dofs"]), float(r["error"])) for r in conv
                              if r["quantity"] == "mu_c" and r["method"] == m and r["error"])
                 if pts:
-                    ax.loglog(*zip(*pts), mk, color=c, ms=ms, mfc="none" if m == "critical_friction" else c,
-                              label={"critical_friction": "meicp.critical_friction",
-                                     "condensed-enumeration": "condensed EiCP in μ, all supports (proof)",
+                    ax.loglog(*zip(*pts), mk, color=c, ms=ms,
+                              mfc="none" if m == "critical_friction-uncondensed" else c,
+                              label={"critical_friction-uncondensed": "critical_friction, former uncondensed path",
+                                     "critical_friction": "meicp.critical_friction (condensed, all supports: proof)",
                                      "condensed-full-support": "condensed, full support (certified)"}[m])
             fs = sorted((int(r["dofs"]), abs(float(r["value"]) - limit) / abs(limit), int(r["n"])) for r in conv
                         if r["quantity"] == "mu_c" and r["method"] == "condensed-full-support" and r["error"])
@@ -608,8 +671,10 @@ def chart_resolution(path):
         ax = axes[2]
         series = {("lambda", "enumerate"): ("analyze, enumeration", "o", "C0"),
                   ("lambda", "active-set"): ("analyze, active-set", "s", "C1"),
-                  ("mu_c", "critical_friction"): ("critical_friction", "s", "C3"),
-                  ("mu_c", "condensed-enumeration"): ("μ_c condensed, all supports", "o", "C9"),
+                  ("mu_c", "critical_friction-uncondensed"): ("critical_friction, former uncondensed path",
+                                                              "s", "C3"),
+                  ("mu_c", "critical_friction+check"): ("critical_friction with its bisection check", "D", "C4"),
+                  ("mu_c", "critical_friction"): ("critical_friction (condensed, no check)", "o", "C9"),
                   ("mu_c", "condensed-full-support"): ("μ_c condensed, full support", "^", "C2")}
         for (q, m), (label, mk, c) in series.items():
             pts = sorted((int(r["dofs"]), max(float(r["wall_s"]), 1e-3)) for r in conv
