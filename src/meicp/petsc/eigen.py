@@ -44,6 +44,9 @@ def ghep_defaults(nev: int, target: float) -> dict:
         "st_ksp_type": "preonly",
         "st_pc_type": "cholesky",
         "st_pc_factor_mat_solver_type": "mumps",
+        # AMF ordering: Debian's MUMPS has no METIS/SCOTCH and picks PORD, which was
+        # 1.05-1.36x slower per eigen-solve from 3e5 to 1e6 DOFs (docs/benchmarks.md, scaling)
+        "st_mat_mumps_icntl_7": 2,
     }
 
 
