@@ -191,7 +191,8 @@ def test_nonsymmetric_lcp_refused_by_symmetric_methods(infeasible_slip_lcp, meth
 
 def test_pgs_symmetric_non_p_without_solution_fails():
     """Symmetric, positive diagonal, indefinite (not P): LCP(q, M) has no solution; PGS
-    diverges, stops when x overflows and reports "diverged", never an x."""
+    diverges, stops when x overflows and reports "diverged" (x keeps the non-finite
+    iterate, for inspection), never a solution."""
     M = np.array([[1.0, -2.0], [-2.0, 1.0]])
     q = np.array([-1.0, -1.0])
     assert fm.ref_lcp(M, q)[0] == []

@@ -95,7 +95,10 @@ def test_options_precedence_and_cleanup():
     db = PETSc.Options()
     db.setValue("tprec_eps_ncv", "24")  # as if given on the command line
     try:
-        with OptionsScope("tprec_", {"eps_nev": 2, "eps_ncv": 10, "bogus": 1}, {"eps_nev": 3}) as scope:
+        # an unread code default (e.g. a MUMPS option when the user picked another solver)
+        # is not reported; an unread option of the user's is
+        with OptionsScope("tprec_", {"eps_nev": 2, "eps_ncv": 10, "default_unread": 1},
+                          {"eps_nev": 3, "bogus": 1}) as scope:
             eps = SLEPc.EPS().create(PETSc.COMM_SELF)
             eps.setOptionsPrefix("tprec_")
             eps.setFromOptions()
@@ -104,6 +107,7 @@ def test_options_precedence_and_cleanup():
         assert (nev, ncv) == (3, 24)  # scene beats code default, command line beats both
         assert scope.unused == ["tprec_bogus"]
         assert not db.hasName("tprec_eps_nev") and not db.hasName("tprec_bogus")
+        assert not db.hasName("tprec_default_unread")
         assert db.hasName("tprec_eps_ncv")  # not ours to delete
     finally:
         db.delValue("tprec_eps_ncv")

@@ -242,3 +242,25 @@ def test_condensed_critical_friction_beyond_the_former_limit():
     below = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, friction=mu * (1 - 1e-4)))
     assert analyze(above, method="active-set").stable is False
     assert analyze(below, method="active-set").stable is not False
+
+
+def test_exact_zero_sigma_slide_is_a_mode_whatever_the_rounding_sign():
+    """A free top with every base node slip+: the whole block slides right at zero stiffness,
+    an exact σ = 0 solution at every μ.  Its σ comes out ±1e-15; the λ ≥ lam_min filter must
+    allow rounding (eicp.problem.lam_floor), else the enumeration "proves" stability at the
+    μ where the sign is negative (0.5 and 3 here)."""
+    for mu in (0.5, 1.0, 3.0):
+        sc = loads_scene(TWO_LAYERS.replace('top = "fixed"', 'top = "free"').replace("friction = 3.0",
+                                                                                   f"friction = {mu}"))
+        r = analyze(sc)
+        assert r.stable is False and abs(r.modes[0].sigma) < 1e-12, mu
+
+
+def test_critical_friction_without_slip_skips_a_large_bisection_and_handles_no_dofs():
+    """No slip or grazing contact: μ_c = inf.  The σ-problem of a large lattice is not
+    enumerated by the default check (it used to raise "|F| = 2200 is too large"), and a
+    lattice with every DOF held gives inf (it used to raise "A is empty")."""
+    stick = TWO_LAYERS.replace('states = "slip+"', 'states = "stick"')
+    big = stick.replace("nx = 5", "nx = 50").replace("rows = 2", "rows = 12")
+    assert critical_friction(loads_scene(big)) == np.inf
+    assert critical_friction(loads_scene(stick.replace("rows = 2", "rows = 1"))) == np.inf

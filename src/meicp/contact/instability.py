@@ -173,6 +173,8 @@ def analyze(scene, comm=None, *, method: str | None = None, scene_path=None, **s
 
 
 def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
+    from ..core.operators import max_abs_entry
+    from ..eicp.problem import lam_floor
     from ..eicp.solve import solve_eicp
 
     solver = scene.solver
@@ -190,8 +192,10 @@ def _solve_meicp(A, B, red, model, sets, scene, comm, method, options):
             kwargs.setdefault("max_iter", solver.max_iterations)
     eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=lam_min, tol=tol,
                       comm=comm if _size(comm) > 1 else None, **kwargs)
-    # strict: a σ below lam_min (even by 5e-11 just below μ_c) is not a divergence mode
-    modes = [_mode(sol, red, sets) for sol in eicp.solutions if sol.lam >= lam_min]
+    # a σ below lam_min (even by 5e-11 just below μ_c) is not a divergence mode, but an exact
+    # σ = lam_min computed a few ulps below it is (eicp.problem.lam_floor)
+    floor = lam_floor(lam_min, (max_abs_entry(A), max_abs_entry(B)))
+    modes = [_mode(sol, red, sets) for sol in eicp.solutions if sol.lam >= floor]
     if chosen == "enumerate":
         cover = eicp.coverage.get("supports", 0)
         if modes:
@@ -293,7 +297,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     ``bisection``: cross-check on the σ-problem with the mass (a σ ≥ 0 mode must exist just
     above μ_c and none just below, each decided by enumerating the whole reduced pencil;
     ConvergenceError if they disagree).  ``None`` (default): run it when that enumeration is
-    within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9 flops, about ≤ 10 pairs on
+    within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9 flops, about ≤ 9 pairs on
     ~150 reduced DOFs), skip it beyond; ``True``: always; ``False``: never.  Serial.
     """
     scene, model, sets = _friction_states(scene)
@@ -302,9 +306,10 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     small, singular = True, False
     for case in grazing_cases(sets):
         red = reduced_system(model, sets, case)
+        # every case counts: the bisection check enumerates the σ-problem of each, with or without J
+        small = small and _enumeration_is_small(red.retained.size, red.J.size)
         if red.J.size == 0:
             continue
-        small = small and _enumeration_is_small(red.retained.size, red.J.size)
         A1, B1 = _friction_pencil(K, red, sets)
         if condense:
             mu, sing = _smallest_mu_condensed(A1, B1, red.J, mu_max)
@@ -505,6 +510,8 @@ def _has_mode(scene, sets, model, mu) -> bool:
 
     for case in grazing_cases(scaled):
         red = reduced_system(model, scaled, case)
+        if red.retained.size == 0:
+            continue  # every DOF held: no mode (as in analyze)
         A = -(red.P @ K @ red.Q).toarray()
         B = (red.P @ M @ red.Q).toarray()
         r = solve_eicp(A, B, J=red.J, method="enumerate", lam_min=0.0)

@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from ..core.validation import is_symmetric
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
 
 
 def _petsc_pair(problem: EiCPProblem, comm):
@@ -113,7 +113,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                            f"a different target (-{prefix}eps_target) may avoid it")
                 break
             if lam_min is not None:
-                pairs = [p for p in pairs if p[0] >= lam_min]  # strict: tol is not a λ tolerance
+                floor = lam_floor(lam_min, scales)  # rounding only: tol is not a λ tolerance
+                pairs = [p for p in pairs if p[0] >= floor]
             if not pairs:
                 status = "not_converged"
                 message = (f"no real eigenpair{'' if lam_min is None else f' with λ ≥ {lam_min}'} among "

@@ -8,10 +8,11 @@ Every ``S`` is visited (``2^|J|`` of them), so the list is complete — and an e
 Speed: supports of one size are solved together as a stack (NumPy's batched LAPACK): for
 symmetric A with SPD B by a batched Cholesky transform and ``eigh``, otherwise by the
 batched standard problem ``B_RR⁻¹A_RR`` (``eig``).  Only sign-feasible eigenvectors reach
-the dual test.  Supports whose reduced pencil has a repeated eigenvalue or a singular
-``B_RR`` are redone one by one: the eigenspace is searched for a feasible vector by a
-linear program (a repeated eigenvalue's arbitrary eigenvector basis must not hide a
-solution), and singular ``B_RR`` goes to ``scipy.linalg.eig``.
+the dual test.  Supports whose reduced pencil has a repeated eigenvalue or a singular or
+ill-conditioned ``B_RR`` (condition estimate above ``COND_LIMIT``) are redone one by one:
+the eigenspace is searched for a feasible vector by a linear program (a repeated
+eigenvalue's arbitrary eigenvector basis must not hide a solution), and the pencil is
+solved by QZ (``scipy.linalg.eig``), not through ``B_RR⁻¹``.
 
 Under MPI (``comm`` with several ranks) the supports are dealt round-robin to the ranks and
 the solutions gathered on every rank.
@@ -28,7 +29,7 @@ from scipy.optimize import linprog
 
 from ..core.errors import ProblemError
 from ..core.validation import is_symmetric
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_batch
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_batch, lam_floor
 
 MAX_J = 24
 #: supports solved per stack (bounds memory: BATCH · |R|² doubles several times)
@@ -205,9 +206,10 @@ class _Enumerator:
         gives one solution per eigenvalue; ±ξ on an empty support are one solution)."""
         X, W, in_support, res = certify_batch(self.problem, lams, X, self.scales)
         # the windows above keep a slack so that no candidate is lost to rounding, but a
-        # reported solution must lie in [lam_min, lam_max]: e.g. σ = −5e-11 just below μ_c
-        # is not a divergence mode (failure-map finding, issue 7)
-        inside = (lams >= self.lam_min) & (lams <= self.lam_max)
+        # reported solution must lie in [lam_min, lam_max] up to rounding: e.g. σ = −5e-11
+        # just below μ_c is not a divergence mode (failure-map finding, issue 7), while an
+        # exact σ = 0 computed as −2e-15 is one
+        inside = (lams >= lam_floor(self.lam_min, self.scales)) & (lams <= self.lam_max)
         for r in np.flatnonzero((res <= self.tol) & inside):
             key = (in_support[r].tobytes(), float(f"{lams[r]:.9g}"))
             if key in self.seen:

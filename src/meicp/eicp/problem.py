@@ -32,6 +32,19 @@ from ..core.validation import as_index_set, as_matrix
 DEFAULT_TOL = 1e-10
 #: x_j above this (relative to ‖x‖∞) counts as in the support
 SUPPORT_TOL = 1e-9
+#: rounding allowance of a λ lower bound, in units of eps·(|lam_min| + max|A|/max|B|)
+LAM_ROUNDING = 1e3
+
+
+def lam_floor(lam_min: float, scales: tuple[float, float]) -> float:
+    """The smallest λ that counts as ``λ ≥ lam_min``: ``lam_min`` less rounding only.  An
+    exact λ = lam_min (e.g. σ = 0 for a block free to slide as a whole) may be computed a few
+    ulps below it and must not be lost; a λ below by more (σ = −5e-11 just below μ_c) is no
+    solution in the window — the certificate tolerance is not a λ tolerance."""
+    if not np.isfinite(lam_min):
+        return lam_min
+    a, b = scales
+    return lam_min - LAM_ROUNDING * np.finfo(float).eps * (abs(lam_min) + (a / b if b > 0 else a))
 
 
 @dataclass(frozen=True)

@@ -47,7 +47,8 @@ def _lexicographic_min(rows: np.ndarray, b: np.ndarray, col: np.ndarray, Binv: n
 
 def lemke(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int | None = None,
           pivot_tol: float = 1e-12, **_ignored) -> LCPResult:
-    """Solve the LCP by Lemke's method.  ``max_iter`` bounds the pivots (default 50 n + 1000).
+    """Solve the LCP by Lemke's method.  ``max_iter`` bounds the pivots of each pass
+    (default 50 n + 1000).
 
     A secondary ray is re-checked by a second pass that refreshes the basis inverse every
     ``REINVERT_EVERY`` pivots: on a 1264-unknown friction LCP rank-one updates alone ended
@@ -69,6 +70,8 @@ def lemke(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int | None
         iterations += more
         if status == "solved":
             result.message = "the first pass ended on a ray; the re-inverting pass solved it"
+        elif status != "ray_termination":
+            message = f"the first pass ended on a secondary ray; the re-inverting pass: {message}"
     result.iterations = iterations
     result.timings["solve"] = time.perf_counter() - t0
     if status != "solved":

@@ -36,36 +36,44 @@ class OptionsScope:
         with OptionsScope("meicp_eps_", {"eps_tol": 1e-10}, scene.petsc) as opts:
             eps.setOptionsPrefix(opts.prefix); eps.setFromOptions()
         opts.unused  # names under the prefix that nothing read
+
+    The first layer is the code's defaults: those that nothing read (e.g. MUMPS options when
+    the user chose another factorisation) are left out of the warning about unused options.
     """
 
     def __init__(self, prefix: str, *layers: dict | None):
         self.prefix = prefix
-        self.layers = [dict(layer) for layer in layers if layer]
+        self.layers = [dict(layer) if layer else {} for layer in layers]
         self.inserted: list[str] = []
         self.unused: list[str] = []
+        self._defaults_only: set[str] = set()
 
     def __enter__(self) -> "OptionsScope":
         PETSc = import_petsc()
         db = PETSc.Options()
-        for layer in reversed(self.layers):  # highest precedence first: lower ones never override
-            for key, value in layer.items():
+        for level in reversed(range(len(self.layers))):  # highest first: lower ones never override
+            for key, value in self.layers[level].items():
                 name = self.prefix + str(key).lstrip("-")
                 if db.hasName(name):
                     continue
                 db.setValue(name, _format(value))
                 self.inserted.append(name)
+                if level == 0:
+                    self._defaults_only.add(name)
         return self
 
     def __exit__(self, *exc) -> None:
         PETSc = import_petsc()
         db = PETSc.Options()
-        self.unused = [name for name in self._names_under_prefix(db) if not options_used(name)]
+        self.unused = [name for name in self._names_under_prefix(db)
+                       if not options_used(name) and name not in self._defaults_only]
         if self.unused:
             log.warning("PETSc options not used by any solver: %s",
                         ", ".join("-" + n for n in self.unused))
         for name in self.inserted:
             db.delValue(name)
         self.inserted.clear()
+        self._defaults_only.clear()
 
     def _names_under_prefix(self, db) -> list[str]:
         return sorted(n for n in db.getAll() if n.startswith(self.prefix))
