@@ -1,7 +1,7 @@
-"""Scene files: TOML (DESIGN §5) loaded into frozen dataclasses.
+"""Scene files: TOML (DESIGN §5) parsed and checked into a :class:`~meicp.scene.Scene`.
 
 A scene declares one layered lattice, its boundary conditions, its contacts and how to
-solve it.  :func:`load_scene` reads a file, :func:`loads_scene` a string and
+solve it (the dataclasses are in :mod:`meicp.scene`; this module only parses and validates).  :func:`load_scene` reads a file, :func:`loads_scene` a string and
 :func:`scene_from_dict` an already parsed table.  Every key is checked: an unknown key, a
 value of the wrong type or out of range raises :class:`~meicp.core.errors.ProblemError`
 naming the key path (``layers[1].density``) before anything else happens.
@@ -75,229 +75,31 @@ The whole schema, with defaults (``required`` = no default)::
     [petsc]                       # free-form: PETSc options (without the leading dash and
     eps_tol = 1e-10               # without the solver's prefix); scalar values only
 
-Resolved at load time, so that later code has one place to look: ``Scene.interfaces`` has
-one entry per pair of adjacent layers, bottom to top (those not declared are bonded with
-the lattice's default rule), and every bonded interface or embedded band carries its
-numeric ``stiffness``; a frictional interface has ``stiffness = None`` and no bonds (its
-contact law is added by the contact module).  ``Embedded.columns`` is resolved to a number.
+What is resolved at load time (the interfaces not declared, default stiffnesses, the width
+of an embedded band) is described in :mod:`meicp.scene`.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import tomllib
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from ..core.errors import ProblemError
-
-#: boundary condition names for any side; "contact" is allowed on the bottom only
-BOUNDARY_KINDS = ("free", "fixed", "fixed_x", "fixed_y")
-CONTACT = "contact"
-SIDES = ("top", "bottom", "left", "right")
-#: contact node states (DESIGN §4), and "solve" = find them from the static LCP
-STATES = ("stick", "slip+", "slip-", "separated", "grazing")
-SOLVE = "solve"
-INTERFACE_KINDS = ("bonded", "frictional")
-
-
-# --------------------------------------------------------------------------- dataclasses
-
-class FrozenOptions(Mapping):
-    """A read-only, picklable mapping (the ``[petsc]`` table): scenes can be sent between
-    ranks with mpi4py and hashed like the other frozen fields."""
-
-    __slots__ = ("_data",)
-
-    def __init__(self, data=()):
-        object.__setattr__(self, "_data", dict(data))
-
-    def __getitem__(self, key):
-        return self._data[key]
-
-    def __iter__(self):
-        return iter(self._data)
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def __setattr__(self, name, value):
-        raise AttributeError("FrozenOptions is read-only")
-
-    def __reduce__(self):
-        return (FrozenOptions, (self._data,))
-
-    def __hash__(self) -> int:
-        return hash(tuple(sorted(self._data.items())))
-
-    def __eq__(self, other) -> bool:
-        return isinstance(other, Mapping) and dict(self) == dict(other)
-
-    def __repr__(self) -> str:
-        return f"FrozenOptions({self._data!r})"
-
-
-@dataclass(frozen=True)
-class Lattice:
-    """The ``[lattice]`` table: columns, spacing, reference shear, default k_AB rule."""
-
-    nx: int
-    spacing: float = 1.0
-    shear: float = 0.0
-    interface_stiffness: str | float = "mean"
-
-    def pair_stiffness(self, k_a: float, k_b: float) -> float:
-        """The default stiffness of a bond joining materials of stiffness ``k_a`` and ``k_b``."""
-        if self.interface_stiffness == "mean":
-            return 0.5 * (k_a + k_b)
-        return float(self.interface_stiffness)
-
-
-@dataclass(frozen=True)
-class Layer:
-    """One ``[[layers]]`` entry: a band of ``rows`` node rows of one material."""
-
-    name: str
-    rows: int
-    stiffness: float
-    density: float
-
-
-@dataclass(frozen=True)
-class Embedded:
-    """One ``[[embedded]]`` entry: a rectangle of another material inside layer ``host``.
-
-    Rows ``row .. row+rows-1`` counted from the host's bottom row, columns
-    ``column .. column+columns-1``.  ``stiffness`` is the bond stiffness inside the band,
-    ``interface_stiffness`` (resolved) the stiffness of bonds between band and host.
-    """
-
-    name: str
-    host: str
-    stiffness: float
-    density: float
-    row: int = 0
-    rows: int = 1
-    column: int = 0
-    columns: int = 0
-    interface_stiffness: float = 0.0
-
-
-@dataclass(frozen=True)
-class Boundary:
-    """``[boundary]``: per side ``free``, ``fixed``, ``fixed_x``, ``fixed_y``; bottom may be ``contact``."""
-
-    top: str = "free"
-    bottom: str = "free"
-    left: str = "free"
-    right: str = "free"
-
-    def fixed_components(self, side: str) -> tuple[bool, bool]:
-        """Whether the (x, y) displacement of the nodes of ``side`` is prescribed (Dirichlet)."""
-        kind = getattr(self, side)
-        return {"fixed": (True, True), "fixed_x": (True, False),
-                "fixed_y": (False, True)}.get(kind, (False, False))
-
-
-@dataclass(frozen=True)
-class Interface:
-    """The interface between layer ``below`` (index ``index``) and layer ``index + 1``.
-
-    ``kind`` is ``bonded`` (bonds with ``stiffness`` cross it) or ``frictional`` (no bonds;
-    the top row of the lower layer and the bottom row of the upper layer are in Coulomb
-    contact with coefficient ``friction``, node states ``states``, DESIGN §4 (b)).
-    ``declared`` tells whether the scene file has an entry for it.
-    """
-
-    below: str
-    index: int
-    kind: str = "bonded"
-    stiffness: float | None = None
-    friction: float | None = None
-    states: str | tuple[str, ...] | None = None
-    declared: bool = False
-
-    @property
-    def bonded(self) -> bool:
-        return self.kind == "bonded"
-
-
-@dataclass(frozen=True)
-class Contact:
-    """``[contact]``: the rigid rough base under the bottom row."""
-
-    friction: float
-    states: str | tuple[str, ...] = SOLVE
-
-
-@dataclass(frozen=True)
-class Load:
-    """``[load]``: prescribed top-row displacement, prescribed x displacement of the left and
-    right columns (``side_displacement``, lateral shortening) and gravity; used by
-    ``states = "solve"`` (the static equilibrium, :mod:`meicp.contact.static`)."""
-
-    top_displacement: tuple[float, float] | None = None
-    gravity: float = 0.0
-    side_displacement: tuple[float, float] | None = None
-
-
-@dataclass(frozen=True)
-class Solver:
-    """``[solver]``: method name and the common controls (``None`` = the solver's default)."""
-
-    method: str = "auto"
-    all_solutions: bool = False
-    lam_min: float | None = None
-    nev: int | None = None
-    tol: float | None = None
-    max_iterations: int | None = None
-
-
-@dataclass(frozen=True)
-class Scene:
-    """A whole scene file.  ``interfaces`` has one entry per adjacent pair of layers."""
-
-    lattice: Lattice
-    layers: tuple[Layer, ...]
-    boundary: Boundary = field(default_factory=Boundary)
-    interfaces: tuple[Interface, ...] = ()
-    embedded: tuple[Embedded, ...] = ()
-    contact: Contact | None = None
-    load: Load | None = None
-    solver: Solver = field(default_factory=Solver)
-    petsc: Mapping[str, Any] = field(default_factory=FrozenOptions)
-    title: str = ""
-    source: str | None = None
-
-    @property
-    def nx(self) -> int:
-        return self.lattice.nx
-
-    @property
-    def ny(self) -> int:
-        """Node rows, all layers together."""
-        return sum(layer.rows for layer in self.layers)
-
-    @property
-    def n_nodes(self) -> int:
-        return self.nx * self.ny
-
-    @property
-    def n_dofs(self) -> int:
-        return 2 * self.n_nodes
-
-    def layer_index(self, name: str) -> int:
-        for k, layer in enumerate(self.layers):
-            if layer.name == name:
-                return k
-        raise KeyError(name)
-
-    def frictional_interfaces(self) -> tuple[Interface, ...]:
-        return tuple(itf for itf in self.interfaces if itf.kind == "frictional")
+from ..scene import (BOUNDARY_KINDS, CONTACT, INTERFACE_KINDS, SIDES, SOLVE, STATES, Boundary, Contact,
+                     Embedded, FrozenOptions, Interface, Lattice, Layer, Load, Scene, Solver)
 
 
 # --------------------------------------------------------------------------- loading
+
+def as_scene(scene) -> Scene:
+    """``scene`` itself, or the Scene read from it when it is a scene file path (str or
+    ``os.PathLike``): what the public entry points accept."""
+    return load_scene(scene) if isinstance(scene, (str, os.PathLike)) else scene
+
 
 def load_scene(path) -> Scene:
     """Read and validate a TOML scene file.  Raises :class:`ProblemError` naming the key."""
