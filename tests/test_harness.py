@@ -113,6 +113,33 @@ def test_options_precedence_and_cleanup():
         db.delValue("tprec_eps_ncv")
 
 
+def test_reduced_pencil_solver_is_a_context_manager_that_keeps_its_options():
+    """Options stay in the database for every solve and leave it with the solver; the ones
+    no solve read are reported once, when it closes."""
+    import scipy.sparse as sp
+
+    from meicp.petsc import import_petsc
+    from meicp.petsc.mat import mat_from_scipy
+    from meicp.petsc.reduced_pencil import ReducedPencilSolver
+
+    db = import_petsc().Options()
+    n = 6
+    A = mat_from_scipy(None, sp.diags(-np.arange(1.0, n + 1)))
+    B = mat_from_scipy(None, sp.identity(n))
+    try:
+        with ReducedPencilSolver(A, B, symmetric=True, target=0.0, spurious=-1e3, nev=2, prefix="trp_",
+                                 options={"eps_tol": 1e-11, "unread": 1}) as solver:
+            for removed in (np.array([], dtype=np.int64), np.array([0])):
+                assert not db.hasName("trp_eps_tol")  # only during a solve
+                lams = [lam for lam, _, _ in solver.solve(removed)]
+                assert max(lams) == pytest.approx(-1.0 if removed.size == 0 else -2.0)
+            assert solver.unused_options == ["trp_unread"] and solver.solves == 2
+        assert not db.hasName("trp_eps_tol") and not db.hasName("trp_unread")
+    finally:
+        A.destroy()
+        B.destroy()
+
+
 def test_serial_distributed_matrix_and_slepc_against_scipy():
     from meicp.petsc.mat import mat_from_scipy, mat_to_scipy
     from meicp.petsc.selfcheck import ghep_selfcheck, laplacian_rows

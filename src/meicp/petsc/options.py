@@ -39,10 +39,13 @@ class OptionsScope:
 
     The first layer is the code's defaults: those that nothing read (e.g. MUMPS options when
     the user chose another factorisation) are left out of the warning about unused options.
+    ``warn=False``: only record them in ``unused`` (a caller that opens one scope per solve
+    reports once, for all of them).
     """
 
-    def __init__(self, prefix: str, *layers: dict | None):
+    def __init__(self, prefix: str, *layers: dict | None, warn: bool = True):
         self.prefix = prefix
+        self.warn = warn
         self.layers = [dict(layer) if layer else {} for layer in layers]
         self.inserted: list[str] = []
         self.unused: list[str] = []
@@ -67,9 +70,8 @@ class OptionsScope:
         db = PETSc.Options()
         self.unused = [name for name in self._names_under_prefix(db)
                        if not options_used(name) and name not in self._defaults_only]
-        if self.unused:
-            log.warning("PETSc options not used by any solver: %s",
-                        ", ".join("-" + n for n in self.unused))
+        if self.warn:
+            report_unused(self.unused)
         for name in self.inserted:
             db.delValue(name)
         self.inserted.clear()
@@ -77,6 +79,12 @@ class OptionsScope:
 
     def _names_under_prefix(self, db) -> list[str]:
         return sorted(n for n in db.getAll() if n.startswith(self.prefix))
+
+
+def report_unused(names) -> None:
+    """Warn (once per call) about options that no PETSc object read."""
+    if names:
+        log.warning("PETSc options not used by any solver: %s", ", ".join("-" + n for n in names))
 
 
 _USED = None

@@ -10,7 +10,10 @@ never changes, MUMPS' symbolic factorisation is reused and only the numeric one 
 the previous wanted eigenvector is the next solve's initial space.
 
 Options live under a prefix (default ``meicp_as_``): ``eps_*``, ``st_*`` — e.g.
-``-meicp_as_eps_nev 8 -meicp_as_st_pc_factor_mat_solver_type superlu_dist``.  Collective.
+``-meicp_as_eps_nev 8 -meicp_as_st_pc_factor_mat_solver_type superlu_dist``.  They are in
+the options database during every solve (so that those read at solve time, such as
+``eps_view``, take effect from a scene's ``[petsc]`` table as from the command line), and
+the ones that no solve read are reported once, when the solver is closed.  Collective.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import numpy as np
 
 from . import import_petsc, import_slepc
 from .mat import vec_to_numpy
-from .options import OptionsScope
+from .options import OptionsScope, report_unused
 
 
 class ReducedPencilSolver:
@@ -27,7 +30,11 @@ class ReducedPencilSolver:
 
     A, B: PETSc Mats (same layout).  symmetric: both symmetric (GHEP) or not (GNHEP).
     target: the shift τ; pairs are returned nearest τ in real part.  spurious: the value α
-    given to removed DOFs.  Call :meth:`destroy` (collective) when done.
+    given to removed DOFs.  A context manager: leaving the ``with`` block (or
+    :meth:`destroy`, collective) reports the unused options and frees the PETSc objects::
+
+        with ReducedPencilSolver(A, B, symmetric=True, target=0.0, spurious=-1e6) as solver:
+            pairs = solver.solve(removed)
     """
 
     def __init__(self, A, B, *, symmetric: bool, target: float, spurious: float, nev: int = 4,
@@ -63,10 +70,12 @@ class ReducedPencilSolver:
         self.eps.setOptionsPrefix(prefix)
         st = self.eps.getST()
         st.setMatStructure(PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        #: options under the prefix that no solve so far has read
         self.unused_options: list = []
         self.solves = 0
         self.eps_iterations = 0
         self._configured = False
+        self._closed = False
 
     def solve(self, removed: np.ndarray, initial: np.ndarray | None = None, *,
               target: float | None = None, nev: int | None = None):
@@ -89,20 +98,21 @@ class ReducedPencilSolver:
             v = self.Aw.createVecRight()
             v.setArray(initial[lo:hi])
             self.eps.setInitialSpace([v])
-        if not self._configured:
-            with OptionsScope(self.prefix, self._defaults, self._options) as scope:
+        with OptionsScope(self.prefix, self._defaults, self._options, warn=False) as scope:
+            first = not self._configured
+            if first:
                 self.eps.setFromOptions()
                 self.eps.setUp()
-            self.unused_options = scope.unused
-            self._configured = True
-            self._target = self.eps.getTarget()
-            self._dimensions = self.eps.getDimensions()
-        self.eps.setTarget(self._target if target is None else target)
-        nev_c, ncv_c, mpd_c = self._dimensions
-        # a followed pair (nev given) sits next to the shift: a small basis converges at once
-        self.eps.setDimensions(nev=nev_c if nev is None else nev, ncv=ncv_c if nev is None else nev + 4,
-                               mpd=mpd_c if nev is None else PETSc.DECIDE)
-        self.eps.solve()
+                self._configured = True
+                self._target = self.eps.getTarget()
+                self._dimensions = self.eps.getDimensions()
+            self.eps.setTarget(self._target if target is None else target)
+            nev_c, ncv_c, mpd_c = self._dimensions
+            # a followed pair (nev given) sits next to the shift: a small basis converges at once
+            self.eps.setDimensions(nev=nev_c if nev is None else nev, ncv=ncv_c if nev is None else nev + 4,
+                                   mpd=mpd_c if nev is None else PETSc.DECIDE)
+            self.eps.solve()
+        self.unused_options = scope.unused if first else [n for n in self.unused_options if n in scope.unused]
         self.solves += 1
         self.eps_iterations += self.eps.getIterationNumber()
         pairs = []
@@ -123,10 +133,21 @@ class ReducedPencilSolver:
         xi.destroy()
         return pairs
 
+    def __enter__(self) -> "ReducedPencilSolver":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
     def destroy(self) -> None:
-        """Free the EPS and work matrices (collective).  After a failed solve SLEPc may refuse
-        to destroy its half-built state; that is ignored (a leak, not a wrong answer)."""
+        """Report the options no solve read, free the EPS and work matrices (collective).
+        After a failed solve SLEPc may refuse to destroy its half-built state; that is
+        ignored (a leak, not a wrong answer)."""
+        if self._closed:
+            return
+        self._closed = True
         PETSc = import_petsc()
+        report_unused(self.unused_options)
         for obj in (self.eps, self.Aw, self.Bw, self.A, self.B):
             try:
                 obj.destroy()
