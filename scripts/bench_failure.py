@@ -90,7 +90,7 @@ def scene(**kw):
 def pencil(sc):
     """(A, B, J) of the scene's contact states, dense: A = −PKQ, B = PMQ."""
     from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.lattice.assembly import assemble
+    from meicp.petsc.assembly import assemble
     from meicp.lattice.model import LatticeModel
 
     model = LatticeModel(sc)
@@ -433,7 +433,7 @@ def slip_lcp_data():
     """G_nn, G_nt, c_n of the two_layers lattice: gap and slip of the base nodes per unit
     normal / tangential reaction (condensed compliance), and the gap under the load."""
     from meicp.contact.static import prescribed_displacements
-    from meicp.lattice.assembly import assemble
+    from meicp.petsc.assembly import assemble
     from meicp.lattice.model import LatticeModel
 
     sc = scene(mu=3.0)

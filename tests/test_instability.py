@@ -5,11 +5,11 @@ import pytest
 import scipy.linalg
 
 import meicp
-from meicp.contact.instability import analyze, critical_friction
+from meicp import analyze, critical_friction
 from meicp.contact.maps import contact_sets, reduced_system
 from meicp.core.errors import ProblemError
 from meicp.io.scene import loads_scene
-from meicp.lattice.assembly import assemble
+from meicp.petsc.assembly import assemble
 from meicp.lattice.model import LatticeModel
 
 from .conftest import ROOT
@@ -221,7 +221,7 @@ def test_zero_stiffness_motion_along_the_slip_directions_is_refused():
 
 
 def test_condensed_critical_friction_contact_limit():
-    from meicp.contact.instability import CRITICAL_J
+    from meicp.contact.critical_friction import CRITICAL_J
 
     wide = TWO_LAYERS.replace("nx = 5", f"nx = {CRITICAL_J + 1}")
     with pytest.raises(ProblemError, match=f"CRITICAL_J = {CRITICAL_J}"):
@@ -264,3 +264,19 @@ def test_critical_friction_without_slip_skips_a_large_bisection_and_handles_no_d
     big = stick.replace("nx = 5", "nx = 50").replace("rows = 2", "rows = 12")
     assert critical_friction(loads_scene(big)) == np.inf
     assert critical_friction(loads_scene(stick.replace("rows = 2", "rows = 1"))) == np.inf
+
+
+def test_scene_petsc_options_apply_on_every_solve(capfd, caplog):
+    """A scene's [petsc] table reaches the active-set's eigen-solves as the command line does:
+    an option read at solve time (eps_view) takes effect, and one that nothing reads is
+    reported, once (it used to be the other way round for eps_view: dropped after set-up)."""
+    text = (SCENES / "two_layers.toml").read_text().replace(
+        "eps_tol = 1e-10", "eps_tol = 1e-10\neps_view = true\neps_no_such_option = 3")
+    r = analyze(loads_scene(text), method="active-set")
+    assert r.stable is False
+    out = capfd.readouterr().out
+    solves = r.eicp[0].coverage["eigen_solves"]
+    assert out.count("EPS Object: (meicp_as_)") == solves >= 1
+    assert r.eicp[0].coverage["unused_options"] == ["meicp_as_eps_no_such_option"]
+    warned = [rec.getMessage() for rec in caplog.records if "not used" in rec.getMessage()]
+    assert warned == ["PETSc options not used by any solver: -meicp_as_eps_no_such_option"]

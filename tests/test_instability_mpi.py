@@ -13,7 +13,7 @@ SCENES = ROOT / "data" / "scenes"
                                           ("sheared_slip_minus.toml", "active-set"),
                                           ("two_layers_stable.toml", "auto")])
 def test_same_modes_on_one_and_two_ranks(comm, name, method):
-    from meicp.contact.instability import analyze
+    from meicp import analyze
 
     par = analyze(SCENES / name, comm=comm, method=method)
     ser = analyze(SCENES / name, method=method)
@@ -31,7 +31,7 @@ def test_same_modes_on_one_and_two_ranks(comm, name, method):
 def test_symmetric_pencil_stability_is_proved_by_inertia_on_two_ranks(comm):
     """All contacts sticking: no complementarity, a symmetric pencil; the active-set finds no
     σ ≥ 0 and the LDLᵀ inertia (MUMPS, in parallel) proves that none exists."""
-    from meicp.contact.instability import analyze
+    from meicp import analyze
     from meicp.io.scene import loads_scene
 
     text = (SCENES / "two_layers.toml").read_text().replace('states = "slip+"', 'states = "stick"')

@@ -22,8 +22,10 @@ import pytest
 import scipy.linalg
 
 from meicp.core.errors import ProblemError
-from meicp.io.scene import Scene, load_scene, scene_from_dict
-from meicp.lattice.assembly import assemble, assemble_scipy, bond_stiffness
+from meicp.io.scene import load_scene, scene_from_dict
+from meicp.lattice.assembly import assemble_scipy, bond_stiffness
+from meicp.petsc.assembly import assemble
+from meicp.scene import Scene
 from meicp.lattice.model import LatticeModel
 
 from .conftest import ROOT

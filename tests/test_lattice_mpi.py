@@ -11,7 +11,7 @@ import pytest
 
 from meicp.core.errors import ProblemError
 from meicp.io.scene import load_scene, scene_from_dict
-from meicp.lattice.assembly import assemble
+from meicp.petsc.assembly import assemble
 from meicp.lattice.model import LatticeModel
 
 from .test_lattice import SCENES, free_scene, single_row_frequencies, single_row_scene, slepc_smallest

@@ -12,7 +12,6 @@ subcommand around it, on hand-built :class:`InstabilityResult` s (no physics her
 import argparse
 import dataclasses
 import struct
-import sys
 import types
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -64,7 +63,7 @@ def unstable_result(scene, *, static=True) -> InstabilityResult:
     return InstabilityResult(status="solved", message="2 modes", iterations=31, residual=5e-12,
                              timings={"assemble": 0.01, "eicp": 0.2}, modes=modes, stable=False,
                              evidence="all 31 supports enumerated", states=list(BASE_STATES),
-                             static=st, eicp=eicp, sizes={"all": scene.n_dofs, "retained": 30,
+                             static=st, eicp=[eicp], sizes={"all": scene.n_dofs, "retained": 30,
                                                           "complementarity": 3})
 
 
@@ -310,9 +309,11 @@ def test_output_path_that_is_a_file(tmp_path, two_layers):
 
 @pytest.fixture
 def fake_analyze(monkeypatch):
-    """``meicp.contact.instability`` replaced by a stand-in that records its calls."""
+    """``analyze`` (as ``meicp solve`` calls it) replaced by a stand-in that records its calls."""
+    from meicp.cli import solve
+
     calls = []
-    module = types.ModuleType("meicp.contact.instability")
+    module = types.ModuleType("fake_instability")
 
     def analyze(scene, comm=None, scene_path=None):
         import logging
@@ -323,7 +324,7 @@ def fake_analyze(monkeypatch):
 
     module.analyze = analyze
     module.make = unstable_result
-    monkeypatch.setitem(sys.modules, "meicp.contact.instability", module)
+    monkeypatch.setattr(solve, "analyze", analyze)
     return module, calls
 
 

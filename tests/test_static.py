@@ -12,8 +12,9 @@ import pytest
 
 from meicp.core.errors import ProblemError
 from meicp.contact.static import TOL, StaticResult, static_equilibrium
-from meicp.io.scene import Load, scene_from_dict
-from meicp.lattice.assembly import assemble
+from meicp.io.scene import scene_from_dict
+from meicp.petsc.assembly import assemble
+from meicp.scene import Load
 from meicp.lattice.model import LatticeModel
 
 LAYERS = [{"name": "A", "rows": 2, "stiffness": 1.0, "density": 1.0},

@@ -14,11 +14,11 @@ from .lcp import LCPResult, solve_lcp  # noqa: E402
 from .lcp.classes import MatrixClasses, classify  # noqa: E402
 from .eicp import EiCPResult, EiCPSolution, solve_eicp  # noqa: E402
 from .lcp.game import GameValue, game_value  # noqa: E402
-from .io.scene import Scene, load_scene  # noqa: E402
-from .lattice.assembly import assemble  # noqa: E402
+from .scene import Scene  # noqa: E402
+from .io.scene import load_scene  # noqa: E402
 from .lattice.model import LatticeModel  # noqa: E402
-from .contact.instability import analyze, critical_friction  # noqa: E402
 from .contact.result import InstabilityResult, Mode  # noqa: E402
+from .api import analyze, assemble, critical_friction  # noqa: E402
 
 __all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
            "classify", "MatrixClasses", "game_value", "GameValue",

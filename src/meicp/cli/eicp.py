@@ -7,12 +7,12 @@ import json
 import numpy as np
 
 from ..core.log import rank0_print
-from .main import EXIT_FAILED, EXIT_OK
+from ..eicp.solve import available_methods, solve_eicp
+from ..io.problem_files import read_problem
+from .exit import Exit
 
 
 def register(sub) -> None:
-    from ..eicp.solve import available_methods
-
     p = sub.add_parser("eicp", help="solve the (mixed) eigenvalue complementarity problem (A, B, J) from a file")
     p.add_argument("file", help="HDF5 (.h5) or MATLAB (.mat) with A, B and optional J (0-based indices)")
     p.add_argument("--method", default="auto", choices=available_methods())
@@ -27,9 +27,6 @@ def register(sub) -> None:
 def run(args) -> int:
     from mpi4py import MPI
 
-    from ..eicp.solve import solve_eicp
-    from ..io.problem_files import read_problem
-
     data = read_problem(args.file, names=("A", "B", "J"))
     J = None if "J" not in data else np.asarray(data["J"]).ravel().astype(np.int64)
     kwargs = {"target": args.target} if args.method in ("active-set", "auto") else {}
@@ -41,7 +38,7 @@ def run(args) -> int:
             "message": r.message, "iterations": r.iterations, "timings": r.timings,
             "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
                            "x": s.x.tolist()} for s in r.solutions]}, indent=2))
-        return EXIT_OK if r.success or r.status == "no_solution" else EXIT_FAILED
+        return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED
     n = np.shape(data["A"])[0]
     rank0_print(f"EiCP from {args.file}: n = {n}, |J| = {n if J is None else J.size}")
     rank0_print(r.summary())
@@ -52,4 +49,4 @@ def run(args) -> int:
             rank0_print(f"{s.lam:22.14g}  {s.residual:9.2e}  {len(sup):9d}  {sup[:12]}{' ...' if len(sup) > 12 else ''}")
         if len(r.solutions) > 50:
             rank0_print(f"... {len(r.solutions) - 50} more (use --json)")
-    return EXIT_OK if r.success or r.status == "no_solution" else EXIT_FAILED
+    return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from ..core.log import rank0_print
-from .main import EXIT_FAILED, EXIT_OK
+from ..info import collect, format_report
+from ..petsc.selfcheck import ghep_selfcheck
+from .exit import Exit
 
 
 def register(sub) -> None:
@@ -14,14 +16,10 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..info import collect, format_report
-
     report = collect()
     rank0_print(format_report(report))
     if args.check:
         from mpi4py import MPI
-
-        from ..petsc.selfcheck import ghep_selfcheck
 
         r = ghep_selfcheck(MPI.COMM_WORLD)
         ok = r["max_rel_error"] < 1e-10 and r["max_residual"] < 1e-8
@@ -30,7 +28,7 @@ def run(args) -> int:
             f"{r['n']}-DOF pencil, SLEPc on {r['ranks']} rank(s) vs SciPy eigh: "
             f"max relative error {r['max_rel_error']:.2e}, SLEPc residual {r['max_residual']:.2e}, "
             f"solve {r['solve_s'] * 1e3:.1f} ms -> {'OK' if ok else 'FAILED'}")
-        return EXIT_OK if ok else EXIT_FAILED
-    return EXIT_OK
+        return Exit.OK if ok else Exit.FAILED
+    return Exit.OK
 
 

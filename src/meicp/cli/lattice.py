@@ -9,7 +9,13 @@ from pathlib import Path
 
 from ..core.errors import ProblemError
 from ..core.log import rank0_print
-from .main import EXIT_OK
+from ..io.lattice_output import write_lattice
+from ..io.scene import load_scene
+from ..lattice.model import LatticeModel
+from ..petsc.assembly import assemble
+from ..petsc.mat import destroying, diagonal, nonzeros
+from ..plotting.lattice import plot_lattice
+from .exit import Exit
 
 
 def register(sub) -> None:
@@ -38,11 +44,6 @@ def _make_dir(comm, out: Path) -> None:
 def run(args) -> int:
     from mpi4py import MPI
 
-    from ..io.lattice_output import write_lattice
-    from ..io.scene import load_scene
-    from ..lattice.assembly import assemble
-    from ..lattice.model import LatticeModel
-
     comm = MPI.COMM_WORLD
     scene = load_scene(args.scene)
     model = LatticeModel(scene)
@@ -53,35 +54,27 @@ def run(args) -> int:
     _make_dir(comm, out)
     rank0_print(model.describe())
 
-    fields, K, M = {}, None, None
+    fields, matrices = {}, ()
     if not args.no_assemble:
-        from ..petsc import import_petsc
-
-        PETSc = import_petsc()
         comm.Barrier()
         t0 = time.perf_counter()
-        K, M = assemble(scene, comm)
+        matrices = assemble(scene, comm)
         comm.Barrier()
         dt = time.perf_counter() - t0
-        info = K.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)
-        rank0_print(f"K: {model.n_dofs} x {model.n_dofs}, {int(info['nz_used']):,} nonzeros "
-                    f"(preallocated {int(info['nz_allocated']):,}, mallocs {int(info['mallocs'])}); "
+        K = matrices[0]
+        nz = nonzeros(K)
+        rank0_print(f"K: {model.n_dofs} x {model.n_dofs}, {nz['nz_used']:,} nonzeros "
+                    f"(preallocated {nz['nz_allocated']:,}, mallocs {nz['mallocs']}); "
                     f"M: lumped, total mass {model.total_mass():.6g}; assembled in {dt:.3f} s "
                     f"on {comm.Get_size()} rank(s)")
-        fields["K_diagonal"] = K.getDiagonal()
-    try:
+        fields["K_diagonal"] = diagonal(K)
+    with destroying(*fields.values(), *matrices):
         files = write_lattice(out / f"{stem}.h5", model, fields=fields, comm=comm)
-    finally:
-        for obj in (fields.get("K_diagonal"), K, M):
-            if obj is not None:
-                obj.destroy()
     rank0_print(f"wrote {files.h5}")
     rank0_print(f"wrote {files.xdmf}  (open it in ParaView)")
     if not args.no_plot:
         error = None
         if comm.Get_rank() == 0:
-            from ..plotting.lattice import plot_lattice
-
             try:
                 png = plot_lattice(model, out / f"{stem}.png")
                 rank0_print(f"wrote {png}")
@@ -90,4 +83,4 @@ def run(args) -> int:
         error = comm.bcast(error, root=0)
         if error:
             raise ProblemError(error)
-    return EXIT_OK
+    return Exit.OK

@@ -7,12 +7,13 @@ import json
 import numpy as np
 
 from ..core.log import rank0_print
-from .main import EXIT_FAILED, EXIT_OK
+from ..io.problem_files import read_problem
+from ..lcp.classes import classify
+from ..lcp.solve import available_methods, solve_lcp
+from .exit import Exit
 
 
 def register(sub) -> None:
-    from ..lcp.solve import available_methods
-
     p = sub.add_parser("lcp", help="solve LCP(q, M) from a Siconos .dat or an HDF5 file (M, q)")
     p.add_argument("file")
     p.add_argument("--method", default="auto", choices=available_methods())
@@ -33,9 +34,6 @@ def _vector(x):
 
 
 def run_lcp(args) -> int:
-    from ..io.problem_files import read_problem
-    from ..lcp.solve import solve_lcp
-
     data = read_problem(args.file)
     method = "enumerate" if args.all else args.method
     r = solve_lcp(data["M"], data["q"], method=method, tol=args.tol)
@@ -57,14 +55,11 @@ def run_lcp(args) -> int:
                 for k, s in enumerate(r.solutions):
                     rank0_print(f"x{'' if len(r.solutions) == 1 else f'[{k}]'} = {s}")
                 rank0_print(f"w = {r.w}")
-    return EXIT_OK if r.success or r.status == "infeasible" else EXIT_FAILED
+    return Exit.OK if r.success or r.status == "infeasible" else Exit.FAILED
 
 
 def run_classify(args) -> int:
-    from ..io.problem_files import read_problem
-    from ..lcp.classes import classify
-
     data = read_problem(args.file, names=("M",))
     c = classify(data["M"], exact_limit=args.exact_limit)
     rank0_print(json.dumps(c.to_dict(), indent=2, default=float) if args.json else c.report())
-    return EXIT_OK
+    return Exit.OK

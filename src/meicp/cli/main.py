@@ -5,8 +5,7 @@ and the scene's ``[petsc]`` table).  Errors are printed once, on rank 0 when eve
 failed alike; a failure on some ranks only ends the whole run with ``MPI_Abort`` after a
 short grace period, so a 2-rank run never hangs.
 
-Exit codes: 0 success, 1 solver failure (no certified answer), 2 bad input or usage,
-3 internal error.
+Exit codes: :class:`~meicp.cli.exit.Exit`.
 """
 
 from __future__ import annotations
@@ -14,11 +13,16 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import traceback
 
 from ..core.errors import ConvergenceError, MeicpError, ProblemError
 from ..core.log import configure_logging, rank0_print, world_rank
+from ..petsc import init
+from . import eicp, info, lattice, lcp, solve
+from .exit import Exit
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+#: the subcommands, each a module with ``register(subparsers)``, in the order of ``--help``
+SUBCOMMANDS = (solve, info, lcp, eicp, lattice)
 #: seconds a failing rank waits for the others to fail alike before aborting the job
 GRACE_SECONDS = 3.0
 
@@ -30,9 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -meicp_as_eps_view")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    # each subcommand lives in its own module with register(subparsers)
-    from . import eicp, info, lattice, lcp, solve
-    for module in (solve, info, lcp, eicp, lattice):
+    for module in SUBCOMMANDS:
         module.register(sub)
     return parser
 
@@ -63,22 +65,18 @@ def main(argv: list[str] | None = None) -> int:
     own, petsc_args = _split_petsc_args(argv)
     args = build_parser().parse_args(own)
     configure_logging(args.verbose)
-    from ..petsc import init
-
     init(petsc_args)
     try:
         return args.run(args)
     except ProblemError as exc:
-        code, text = EXIT_BAD_INPUT, f"meicp: error: {exc}"
+        code, text = Exit.BAD_INPUT, f"meicp: error: {exc}"
     except ConvergenceError as exc:
-        code, text = EXIT_FAILED, f"meicp: failed: {exc}"
+        code, text = Exit.FAILED, f"meicp: failed: {exc}"
     except MeicpError as exc:
-        code, text = EXIT_FAILED, f"meicp: {exc}"
+        code, text = Exit.FAILED, f"meicp: {exc}"
     except Exception as exc:  # noqa: BLE001 - last resort: report, never hang the other ranks
-        import traceback
-
         traceback.print_exc()
-        code, text = EXIT_INTERNAL, f"meicp: internal error: {type(exc).__name__}: {exc}"
+        code, text = Exit.INTERNAL, f"meicp: internal error: {type(exc).__name__}: {exc}"
     if _all_ranks_failed():
         rank0_print(text, file=sys.stderr)
         return code

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core.errors import ProblemError
-from ..io.scene import SOLVE, STATES
+from ..scene import SOLVE, STATES
 
 #: how many grazing contacts' tangential cases (3 each) may be enumerated
 MAX_GRAZING = 6

@@ -1,13 +1,23 @@
 """What :func:`meicp.analyze` returns (DESIGN §5): divergence modes, stability verdict and
-its evidence, contact states, timings."""
+its evidence, contact states, timings; and the summary table ``meicp solve`` prints."""
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..core.results import Result
+from ..scene import STATES
+
+#: one character per contact state, for the compact per-column strip of the summary
+GLYPHS = dict(zip(STATES, "|><o~"))
+#: show the per-column strip up to this many columns
+STRIP_MAX = 100
+#: modes listed in a summary
+SUMMARY_MODES = 10
 
 
 @dataclass
@@ -43,7 +53,9 @@ class InstabilityResult(Result):
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
-    eicp: the raw :class:`~meicp.eicp.problem.EiCPResult` (None when nothing was solved).
+    eicp: the raw :class:`~meicp.eicp.problem.EiCPResult` of each MEiCP solved, one per
+        grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
+        case with every DOF held: nothing to solve); empty when no MEiCP was reached.
     sizes: DOF counts (all, retained, complementarity).
     """
 
@@ -53,15 +65,79 @@ class InstabilityResult(Result):
     states: list = field(default_factory=list)
     interface_states: dict = field(default_factory=dict)
     static: object = None
-    eicp: object = None
+    eicp: list = field(default_factory=list)
     sizes: dict = field(default_factory=dict)
 
+    @property
+    def verdict(self) -> str:
+        """STABLE, UNSTABLE or UNDECIDED (the verdict alone, whatever ``status``)."""
+        return {True: "STABLE", False: "UNSTABLE"}.get(self.stable, "UNDECIDED")
+
     def summary(self) -> str:
-        verdict = {True: "STABLE", False: "UNSTABLE", None: "UNDECIDED"}[self.stable]
-        lines = [f"{verdict}: {self.evidence}"]
-        for k, m in enumerate(self.modes[:10]):
+        lines = [f"{self.verdict}: {self.evidence}"]
+        for k, m in enumerate(self.modes[:SUMMARY_MODES]):
             lines.append(f"  mode {k}: σ = {m.sigma:.10g}, growth rate λ = {m.growth_rate:.6g}, "
                          f"slipping nodes {m.support.tolist()}, residual {m.residual:.1e}")
-        if len(self.modes) > 10:
-            lines.append(f"  ... {len(self.modes) - 10} more modes")
+        if len(self.modes) > SUMMARY_MODES:
+            lines.append(f"  ... {len(self.modes) - SUMMARY_MODES} more modes")
         return "\n".join(lines)
+
+    def summary_rows(self, scene, *, ranks: int = 1) -> list[tuple[str, str]]:
+        """The (key, text) rows of the table ``meicp solve`` prints for ``scene``: the scene and
+        its sizes, the states of each contact line, the verdict, its evidence, the modes (a
+        mode table row has key ``""``) and the timings."""
+        rows = []
+        name = scene.title or (Path(scene.source).stem if scene.source else "scene")
+        rows.append(("scene", name + (f"  ({scene.source})" if scene.source else "")))
+        size_text = ", ".join(f"{k} {v:,}" if isinstance(v, int) else f"{k} {v}" for k, v in self.sizes.items())
+        rows.append(("lattice", f"{scene.nx} × {scene.ny} nodes, {scene.n_dofs:,} DOFs"
+                     + (f" ({size_text})" if size_text else "") + f", {ranks} rank{'s' if ranks != 1 else ''}"))
+        if scene.boundary.bottom == "contact":
+            rows.append(("base", f"{scene.nx} contact nodes, μ = {scene.contact.friction:g}: "
+                                 f"{states_compact(self.states)}{_strip(self.states)}"))
+        for itf in scene.frictional_interfaces():
+            st = list(self.interface_states.get(itf.below) or [])
+            rows.append((f"interface {itf.below}", f"{scene.nx} contact pairs, μ = {itf.friction:g}: "
+                                                   f"{states_compact(st)}{_strip(st)}"))
+        verdict = self.verdict
+        if not self.success:
+            verdict = f"FAILED ({self.status})" + ("" if self.stable is None else f", last verdict {verdict}")
+        rows.append(("verdict", verdict))
+        if self.evidence:
+            rows.append(("evidence", self.evidence))
+        if self.message and self.message != self.evidence:
+            rows.append(("message", self.message))
+        if self.modes:
+            n = len(self.modes)
+            rows.append(("modes", f"{n} certified divergence mode{'s' if n != 1 else ''} (σ = λ², fastest first)"))
+            rows.append(("", f"  {'#':>3}  {'σ':>14}  {'growth rate λ':>14}  {'support':>8}  {'residual':>9}"))
+            for k, m in enumerate(self.modes[:SUMMARY_MODES]):
+                sup = int(np.size(m.support)) + sum(int(np.size(v)) for v in m.interface_support.values())
+                rows.append(("", f"  {k:>3}  {m.sigma:>14.8g}  {m.growth_rate:>14.8g}  {sup:>8d}  {m.residual:>9.1e}"))
+            if n > SUMMARY_MODES:
+                rows.append(("", f"  ... {n - SUMMARY_MODES} more (all in results.h5)"))
+        else:
+            rows.append(("modes", "none"))
+        if self.timings:
+            rows.append(("timings", ", ".join(f"{k} {seconds(float(v))}" for k, v in self.timings.items())))
+        return rows
+
+
+def states_compact(states) -> str:
+    """``slip+ ×12, stick ×3`` (in the order of DESIGN §4's table); "unknown" when empty."""
+    if not states:
+        return "unknown"
+    counts = Counter(states)
+    order = list(GLYPHS) + sorted(set(counts) - set(GLYPHS))
+    return ", ".join(f"{s} ×{counts[s]}" for s in order if counts[s])
+
+
+def _strip(states) -> str:
+    if not states or len(states) > STRIP_MAX:
+        return ""
+    return "  [" + "".join(GLYPHS.get(s, "?") for s in states) + "]"
+
+
+def seconds(t: float) -> str:
+    """A duration for people: milliseconds below a second."""
+    return f"{t * 1e3:.1f} ms" if t < 1 else f"{t:.2f} s"

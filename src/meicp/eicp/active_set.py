@@ -26,12 +26,13 @@ import time
 import numpy as np
 
 from ..core.validation import is_symmetric
+from ..petsc import import_petsc
+from ..petsc.mat import mat_from_scipy
+from ..petsc.reduced_pencil import ReducedPencilSolver
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
 
 
 def _petsc_pair(problem: EiCPProblem, comm):
-    from ..petsc.mat import mat_from_scipy
-
     if problem.distributed:
         return problem.A, problem.B, False
     return mat_from_scipy(comm, problem.A), mat_from_scipy(comm, problem.B), True
@@ -82,9 +83,6 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     status, message = "max_iterations", f"no certified solution within {max_iter} support updates"
     single_moves = False
     initial = None
-    from ..petsc import import_petsc
-    from ..petsc.reduced_pencil import ReducedPencilSolver
-
     PETSc = import_petsc()
     try:
 

@@ -24,9 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ProblemError
-from ..core.operators import is_petsc_mat, matvec, max_abs_entry, to_dense
 from ..core.results import Result
 from ..core.validation import as_index_set, as_matrix
+from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, to_dense
 
 #: default relative certificate tolerance
 DEFAULT_TOL = 1e-10

@@ -38,9 +38,10 @@ from collections import deque
 import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
 
 from ..core.errors import ProblemError
-from ..core.operators import to_dense
+from ..petsc.mat import mat_to_scipy, to_dense
 from ..core.validation import check_spd, check_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_pair
 
@@ -140,8 +141,6 @@ def _serial_symmetric_pencil(problem: EiCPProblem):
     """(A, B) as ndarray / CSR after the symmetric-definite checks this method relies on."""
     A, B = problem.A, problem.B
     if problem.distributed:
-        from ..petsc.mat import mat_to_scipy
-
         A, B = mat_to_scipy(A), mat_to_scipy(B)
     try:
         check_symmetric(A, "A")
@@ -383,8 +382,6 @@ class _Polisher:
         if R.size <= DENSE_POLISH_LIMIT:
             lams, vecs = la.eigh(to_dense(A_RR), to_dense(B_RR))
         else:
-            from scipy.sparse.linalg import eigsh
-
             k = min(6, R.size - 1)
             lams, vecs = eigsh(sp.csc_matrix(A_RR), k=k, M=sp.csc_matrix(B_RR), sigma=r,
                                which="LM")

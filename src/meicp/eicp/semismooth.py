@@ -19,6 +19,9 @@ import time
 import numpy as np
 
 from ..core.errors import ProblemError
+from ..petsc.comm import comm_size
+from ..petsc.eicp_vi import snes_vi_eicp
+from ..petsc.mat import mat_to_scipy
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
 
 #: SNES stops when ‖F‖₂ ≤ ATOL_FACTOR · (matrix scale); the certificate then decides
@@ -51,9 +54,6 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
     if not np.isfinite(lam_start):
         raise ProblemError(f"lam0 must be finite, got {lam_start} (x0ᵀBx0 = 0?)")
     scales = problem.scales()
-
-    from ..petsc.eicp_vi import snes_vi_eicp
-
     x, lam, its, reason, converged, seconds = snes_vi_eicp(
         A, B, problem.J, x_start, lam_start, atol=ATOL_FACTOR * max(scales[0], scales[1], 1.0),
         max_iter=max_iter, snes_type=snes_type, options=options)
@@ -94,11 +94,9 @@ def _serial_pencil(problem: EiCPProblem):
     """A, B as ndarray / CSR; a PETSc Mat is gathered only when it lives on one rank."""
     if not problem.distributed:
         return problem.A, problem.B
-    if problem.A.getComm().getSize() > 1:
+    if comm_size(problem.A.getComm()) > 1:
         raise ProblemError("semismooth runs serially: pass NumPy/SciPy matrices or a Mat on "
                            "one rank")
-    from ..petsc.mat import mat_to_scipy
-
     return mat_to_scipy(problem.A), mat_to_scipy(problem.B)
 
 

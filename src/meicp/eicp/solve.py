@@ -13,9 +13,12 @@ import logging
 import time
 
 from ..core.errors import ProblemError, SolverNotFound
+from ..petsc.comm import mpi_comm
 from .active_set import active_set
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult
+from .rayleigh import rayleigh
+from .semismooth import semismooth
 
 #: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
 AUTO_ENUMERATE_J = 16
@@ -27,20 +30,11 @@ LOOSE_TOL = 1e-6
 log = logging.getLogger("meicp")
 
 
-def _lazy(module: str, name: str):
-    def run(problem, **kwargs):
-        import importlib
-
-        return getattr(importlib.import_module(f"{__package__}.{module}"), name)(problem, **kwargs)
-    run.__name__ = name
-    return run
-
-
 SOLVERS = {
     "enumerate": enumerate_eicp,
     "active-set": active_set,
-    "rayleigh": _lazy("rayleigh", "rayleigh"),
-    "semismooth": _lazy("semismooth", "semismooth"),
+    "rayleigh": rayleigh,
+    "semismooth": semismooth,
 }
 
 
@@ -72,10 +66,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
         method = "enumerate" if small else "active-set"
     if method not in SOLVERS:
         raise SolverNotFound(method, available_methods())
-    if problem.distributed and comm is None:
-        comm = problem.A.getComm()
-    if comm is not None and hasattr(comm, "tompi4py"):
-        comm = comm.tompi4py()
+    comm = mpi_comm(problem.A.getComm() if problem.distributed and comm is None else comm)
     t0 = time.perf_counter()
     kw = dict(kwargs, tol=tol, lam_min=lam_min)
     if method in ("enumerate", "active-set"):

@@ -42,9 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import __version__
 from ..core.errors import ProblemError
 from ..lattice.assembly import as_model
 from ..lattice.model import BOND_KINDS, LatticeModel
+from ..petsc.comm import mpi_comm
+from .scene import as_scene
 
 FORMAT = "meicp-lattice"
 FORMAT_VERSION = 1
@@ -57,15 +60,6 @@ _RESERVED = ("material", "mass", "fixed", "contact", "bond_kind", "bond_stiffnes
 class LatticeFiles:
     h5: Path
     xdmf: Path
-
-
-def mpi_comm_or_none(comm):
-    """An mpi4py communicator with several ranks, or None (serial: nothing to gather)."""
-    if comm is None:
-        return None
-    if hasattr(comm, "tompi4py"):
-        comm = comm.tompi4py()
-    return comm if comm.Get_size() > 1 else None
 
 
 def _local_field(name, value, model: LatticeModel, j0: int, j1: int):
@@ -147,8 +141,6 @@ def _materials(model: LatticeModel) -> dict:
 
 
 def _attrs(model: LatticeModel, n_bonds: int) -> dict:
-    from .. import __version__
-
     return {"format": FORMAT, "format_version": FORMAT_VERSION, "nx": model.nx, "ny": model.ny,
             "spacing": model.spacing, "shear": model.shear, "n_nodes": model.n_nodes,
             "n_dofs": model.n_dofs, "n_bonds": n_bonds, "meicp_version": __version__,
@@ -181,8 +173,8 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
     """
     if parallel_io not in ("auto", "collective", "gather"):
         raise ProblemError(f"parallel_io must be 'auto', 'collective' or 'gather', got {parallel_io!r}")
-    model = as_model(scene)
-    mcomm = mpi_comm_or_none(comm)
+    model = as_model(as_scene(scene))
+    mcomm = mpi_comm(comm)
     rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
     path = Path(path)
     if path.suffix.lower() not in (".h5", ".hdf5"):

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.io import loadmat
 
 from ..core.errors import ProblemError
 
@@ -145,8 +146,6 @@ def read_problem(path, names=("M", "q")) -> dict:
     if path.suffix in (".h5", ".hdf5"):
         data = read_hdf5_problem(path, names)
     elif path.suffix == ".mat":
-        from scipy.io import loadmat
-
         raw = loadmat(path)
         data = {k: (raw[k] if sp.issparse(raw[k]) else np.asarray(raw[k], dtype=float)) for k in names if k in raw}
     else:

@@ -64,15 +64,21 @@ import datetime
 import json
 import math
 import os
+import platform
 import shutil
 from pathlib import Path
 
 import numpy as np
+import scipy
 
+from .. import __version__
 from ..core.errors import MeicpError, ProblemError
+from ..info import collect
 from ..lattice.assembly import as_model
-from .lattice_output import mpi_comm_or_none
-from .scene import STATES, Scene
+from ..petsc.comm import mpi_comm
+from ..plotting import lattice as plotting
+from ..scene import STATES, Scene
+from .lattice_output import write_lattice
 
 FORMAT = "meicp-results"
 FORMAT_VERSION = 1
@@ -91,18 +97,9 @@ STATIC_FIELDS = ("r_n", "r_t", "gap", "slip")
 def versions() -> dict:
     """Versions worth recording next to a result (:func:`meicp.info.collect` when PETSc is
     importable, else the pure-Python part).  Values are strings or numbers."""
-    import platform
-
-    import numpy
-    import scipy
-
-    from .. import __version__
-
-    out = {"meicp": __version__, "python": platform.python_version(), "numpy": numpy.__version__,
+    out = {"meicp": __version__, "python": platform.python_version(), "numpy": np.__version__,
            "scipy": scipy.__version__}
     try:
-        from ..info import collect
-
         out.update(collect())
     except Exception as exc:  # noqa: BLE001 - versions are informative, never fatal
         out["petsc"] = f"unavailable ({type(exc).__name__}: {exc})"
@@ -347,8 +344,6 @@ def _strings(values, width: int = 16) -> np.ndarray:
 
 def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, vers: dict,
               scales: list, ranks: int) -> None:
-    from .. import __version__
-
     stable = getattr(result, "stable", None)
     verdict = {True: "stable", False: "unstable"}.get(stable, "undecided")
     modes = prep["modes"]
@@ -445,8 +440,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         g = f.create_group("certificates")
         res = np.array([m["residual"] for m in modes], dtype=float)
         g.create_dataset("mode_residual", data=res)
-        eicp = getattr(result, "eicp", None)
-        solves = [e for e in (eicp if isinstance(eicp, (list, tuple)) else [eicp]) if e is not None]
+        solves = [e for e in result.eicp if e is not None]  # one per grazing case
 
         def joined(name):  # one value per MEiCP solved (one per grazing case), " | " between
             values = [getattr(e, name, None) for e in solves]
@@ -468,12 +462,9 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
                max_xdmf_modes: int, plots: bool) -> dict:
     import h5py
 
-    from ..plotting.lattice import ContactLine, display_scale, plot_contacts, plot_mode
-    from .lattice_output import write_lattice
-
     model = as_model(scene)
     modes = prep["modes"]
-    scales = [display_scale(model, m["x"]) for m in modes]
+    scales = [plotting.display_scale(model, m["x"]) for m in modes]
     written = {}
 
     _write_h5(h5py, stage / FILES["results"], scene, result, prep, text, vers, scales, ranks)
@@ -488,7 +479,7 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
 
     if plots:
         fastest = modes[0]["mode"] if modes else None
-        plot_mode(model, stage / FILES["mode_png"], fastest, stable=getattr(result, "stable", None),
+        plotting.plot_mode(model, stage / FILES["mode_png"], fastest, stable=getattr(result, "stable", None),
                   n_modes=len(modes))
         written["mode_png"] = FILES["mode_png"]
         if prep["lines"]:
@@ -503,9 +494,9 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
                     sup = modes[0]["support"]
                 else:
                     sup = modes[0]["interface_support"].get(key)
-                lines.append(ContactLine(label=label, friction=mu, states=prep["states"].get(key) or None,
+                lines.append(plotting.ContactLine(label=label, friction=mu, states=prep["states"].get(key) or None,
                                          support=sup, scale=u_scale, **per_line[key]))
-            plot_contacts(model, stage / FILES["contacts_png"], lines)
+            plotting.plot_contacts(model, stage / FILES["contacts_png"], lines)
             written["contacts_png"] = FILES["contacts_png"]
     return written
 
@@ -525,7 +516,7 @@ def write_results(directory, scene, result, *, comm=None, scene_text: str | None
     same dict or raises the same error.  Raises :class:`ProblemError` for a result that does
     not fit the scene, before anything is written.
     """
-    mcomm = mpi_comm_or_none(comm)
+    mcomm = mpi_comm(comm)
     rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
     directory = Path(directory)
     vers = versions()  # on every rank: importing PETSc may be collective

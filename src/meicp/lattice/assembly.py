@@ -11,20 +11,21 @@ Element matrix of a bond of stiffness ``k`` and unit direction ``e`` (DESIGN §4
 seed 000 applied): ``k [[A, −A], [−A, A]]`` with ``A = e eᵀ``, each bond with its own
 direction.  Mass: ``ρ a³`` on both DOFs of every node.
 
-:func:`assemble` is the public entry: SciPy CSR when ``comm`` is ``None``, distributed PETSc
-matrices (built by :mod:`meicp.petsc.assembly` from the same row blocks) otherwise.
+Serial and plain SciPy: :func:`assemble_scipy` gives CSR matrices.  The distributed PETSc
+assembly (:mod:`meicp.petsc.assembly`) builds its rows from the same blocks
+(:func:`stiffness_block`, :func:`mass_diagonal`) and hosts :func:`meicp.assemble`, which picks
+one or the other by communicator; nothing here knows of PETSc.
 :func:`bond_stiffness` is an independent, bond-by-bond reference for arbitrary node
 positions (deformed cells, tests).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import scipy.sparse as sp
 
 from ..core.errors import ProblemError
+from ..scene import Scene
 from .model import SELF, SLOTS, LatticeModel
 
 #: nodes per chunk, at most: bounds the temporaries (about 700 bytes per node of a chunk)
@@ -34,35 +35,14 @@ MIN_CHUNK_NODES = 1 << 10
 
 
 def as_model(scene) -> LatticeModel:
-    """A :class:`LatticeModel` from a model, a :class:`~meicp.io.scene.Scene` or a scene path."""
-    from ..io.scene import Scene, load_scene
-
+    """A :class:`LatticeModel` from a model or a :class:`~meicp.scene.Scene` (a scene file is
+    read by :func:`meicp.load_scene` first)."""
     if isinstance(scene, LatticeModel):
         return scene
-    if isinstance(scene, (str, Path)):
-        scene = load_scene(scene)
     if not isinstance(scene, Scene):
-        raise ProblemError(f"scene must be a Scene, a LatticeModel or a path, got {type(scene).__name__}")
+        raise ProblemError(f"scene must be a Scene or a LatticeModel, got {type(scene).__name__} "
+                           "(read a scene file with meicp.load_scene)")
     return LatticeModel(scene)
-
-
-def assemble(scene, comm=None):
-    """``(K, M)`` of a scene in natural DOF numbering (DOFs ``2n``, ``2n+1`` of node ``n = j·nx + i``).
-
-    ``comm=None``: SciPy CSR matrices (canonical: sorted, no duplicates).  ``comm`` an mpi4py
-    or PETSc communicator: PETSc AIJ matrices (MPIAIJ on several ranks) distributed by
-    contiguous bands of node rows, each rank building only its own rows; this is collective
-    on ``comm``, and the caller owns the matrices and destroys them (``K.destroy()``,
-    ``M.destroy()``, collective) when done.  Every node of the lattice has its 2 DOFs,
-    Dirichlet ones included (see ``LatticeModel.constrained_dofs``); frictional interfaces
-    have no bonds.  ``scene`` may also be a path or a :class:`LatticeModel`.
-    """
-    model = as_model(scene)
-    if comm is None:
-        return assemble_scipy(model)
-    from ..petsc.assembly import assemble_petsc
-
-    return assemble_petsc(model, comm)
 
 
 def index_dtype(model: LatticeModel):

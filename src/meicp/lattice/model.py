@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import ProblemError
+from ..scene import Scene
 
 #: the 8 neighbour offsets (di, dj) plus the node itself, in increasing natural column order
 SLOTS = ((-1, -1), (0, -1), (1, -1), (-1, 0), (0, 0), (1, 0), (-1, 1), (0, 1), (1, 1))
@@ -61,8 +62,6 @@ class LatticeModel:
     """
 
     def __init__(self, scene):
-        from ..io.scene import Scene
-
         if not isinstance(scene, Scene):
             raise ProblemError(f"expected a Scene, got {type(scene).__name__}")
         self.scene = scene

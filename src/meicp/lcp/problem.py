@@ -17,10 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
-from ..core.operators import is_petsc_mat, matvec, max_abs_entry, to_dense
 from ..core.results import SOLVED, Result
 from ..core.validation import as_matrix, as_vector
+from ..petsc.lcp import check_petsc_matrix
+from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, to_dense
 
 #: default relative certificate tolerance
 DEFAULT_TOL = 1e-10
@@ -37,8 +39,6 @@ class LCPProblem:
     def from_data(cls, M, q) -> "LCPProblem":
         """Validate ``M`` (ndarray, SciPy sparse or PETSc Mat) and ``q`` (NumPy, full length)."""
         if is_petsc_mat(M):
-            from ..petsc.lcp import check_petsc_matrix
-
             check_petsc_matrix(M)
             return cls(M, as_vector(q, M.getSize()[0], "q"))
         M = as_matrix(M, "M")
@@ -148,8 +148,6 @@ def refine_on_support(problem: LCPProblem, x: np.ndarray) -> np.ndarray | None:
     M = problem.M
     try:
         if problem.sparse:
-            import scipy.sparse.linalg as spla
-
             xs = spla.spsolve(M[S][:, S].tocsc(), -problem.q[S])
         else:
             xs = np.linalg.solve(M[np.ix_(S, S)], -problem.q[S])

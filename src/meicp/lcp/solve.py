@@ -17,6 +17,7 @@ import time
 
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.validation import is_symmetric
+from ..petsc import lcp as petsc_lcp
 from .enumeration import enumerate_lcp
 from .lemke import lemke
 from .pgs import pgs
@@ -32,8 +33,6 @@ def _petsc_method(kind: str):
     def run(problem: LCPProblem, *, tol: float = DEFAULT_TOL, comm=None, options=None,
             max_iter: int | None = None, snes_type: str = "vinewtonrsls", tao_type: str = "tron",
             **_ignored) -> LCPResult:
-        from ..petsc import lcp as petsc_lcp
-
         M = problem.M
         if kind == "tao" and not problem.distributed and not is_symmetric(M, 1e-12):
             raise ProblemError("tao solves the LCP as a QP and needs a symmetric M (use newton)")

@@ -66,20 +66,3 @@ def import_slepc():
     from slepc4py import SLEPc
     return SLEPc
 
-
-def comm_size(comm) -> int:
-    """Size of an mpi4py or PETSc communicator; 1 for ``None``."""
-    if comm is None:
-        return 1
-    return comm.getSize() if hasattr(comm, "getSize") else comm.Get_size()
-
-
-def to_petsc_comm(comm):
-    """A PETSc communicator from ``None`` (self), an mpi4py or a PETSc communicator."""
-    PETSc = import_petsc()
-    if comm is None:
-        return PETSc.COMM_SELF
-    if isinstance(comm, PETSc.Comm):
-        return comm
-    return PETSc.Comm(comm)
-

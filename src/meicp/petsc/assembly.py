@@ -1,4 +1,8 @@
-"""Distributed assembly of the lattice's K and M as PETSc AIJ matrices.
+"""Distributed assembly of the lattice's K and M as PETSc AIJ matrices, and
+:func:`assemble`, which chooses between it and the serial SciPy assembly.
+
+The serial assembly (:mod:`meicp.lattice.assembly`) knows nothing of PETSc; this module
+builds on it, one way (as DOLFINx's ``fem/petsc.py`` builds on ``fem/assemble.py``).
 
 Layout: the ranks split the lattice into contiguous bands of node rows
 (:meth:`LatticeModel.row_band`); since nodes are numbered row by row, a band's DOFs are a
@@ -18,9 +22,29 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ProblemError
-from ..lattice.assembly import chunks, index_dtype, mass_diagonal, neighbour_exists, stiffness_block
+from ..lattice.assembly import (as_model, assemble_scipy, chunks, index_dtype, mass_diagonal,
+                                neighbour_exists, stiffness_block)
 from ..lattice.model import SLOTS, LatticeModel
-from . import import_petsc, to_petsc_comm
+from . import import_petsc
+from .comm import to_petsc_comm
+
+
+def assemble(scene, comm=None):
+    """``(K, M)`` of a scene in natural DOF numbering (DOFs ``2n``, ``2n+1`` of node ``n = j·nx + i``).
+
+    ``comm=None``: SciPy CSR matrices (canonical: sorted, no duplicates).  ``comm`` an mpi4py
+    or PETSc communicator: PETSc AIJ matrices (MPIAIJ on several ranks) distributed by
+    contiguous bands of node rows, each rank building only its own rows; this is collective
+    on ``comm``, and the caller owns the matrices and destroys them (``K.destroy()``,
+    ``M.destroy()``, collective) when done.  Every node of the lattice has its 2 DOFs,
+    Dirichlet ones included (see ``LatticeModel.constrained_dofs``); frictional interfaces
+    have no bonds.  ``scene``: a :class:`~meicp.scene.Scene` or a :class:`LatticeModel`
+    (:func:`meicp.assemble` also reads a scene file).
+    """
+    model = as_model(scene)
+    if comm is None:
+        return assemble_scipy(model)
+    return assemble_petsc(model, comm)
 
 
 def row_band(model: LatticeModel, comm) -> tuple[int, int]:
@@ -103,11 +127,3 @@ def principal_submatrix(A, keep):
     finally:
         iset.destroy()
 
-
-def storage_bytes(A) -> int:
-    """Bytes of this rank's part of an AIJ matrix: values, column indices and row starts."""
-    PETSc = import_petsc()
-    nnz = int(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_allocated"])
-    m = A.getLocalSize()[0]
-    isz = np.dtype(PETSc.IntType).itemsize
-    return nnz * (np.dtype(PETSc.ScalarType).itemsize + isz) + (m + 1) * isz

@@ -8,7 +8,9 @@ Collective on the matrix's communicator.
 
 from __future__ import annotations
 
+from ..core.validation import is_symmetric
 from . import import_petsc
+from .mat import is_petsc_mat, mat_from_scipy
 from .options import OptionsScope
 
 PREFIX = "meicp_inertia_"
@@ -33,3 +35,24 @@ def inertia(A) -> tuple[int, int, int]:
         return int(nneg), int(nzero), int(npos)
     finally:
         ksp.destroy()
+
+
+def eigenvalues_at_or_above(A, B, lam_min: float):
+    """How many eigenvalues of the pencil (A, B) are ≥ lam_min when it is symmetric with B SPD
+    (Sylvester's inertia of ``A − lam_min·B``); None for a nonsymmetric pencil.  A, B: SciPy
+    (factored on this process) or PETSc Mats (collective)."""
+    if is_petsc_mat(A):
+        a = max(abs(A.norm()), 1e-300)
+        if not (A.isSymmetric(1e-12 * a) and B.isSymmetric(1e-12 * a)):
+            return None
+        C = A.duplicate(copy=True)
+        C.axpy(-lam_min, B)
+    else:
+        if not (is_symmetric(A, 1e-12) and is_symmetric(B, 1e-12)):
+            return None
+        C = mat_from_scipy(None, (A - lam_min * B).tocsr())
+    try:
+        _, zero, positive = inertia(C)
+    finally:
+        C.destroy()
+    return zero + positive

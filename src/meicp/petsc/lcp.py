@@ -15,9 +15,10 @@ SciPy matrix (used on ``COMM_SELF``).  Options live under ``-meicp_lcp_`` (``sne
 
 from __future__ import annotations
 
-
 import numpy as np
+import scipy.sparse as sp
 
+from ..core.errors import ProblemError
 from . import import_petsc
 from .mat import mat_from_scipy, vec_to_numpy
 from .options import configure_and_solve
@@ -92,35 +93,11 @@ def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
 
 def check_petsc_matrix(A) -> None:
     """Square and finite, or ProblemError (collective)."""
-    from ..core.errors import ProblemError
-
     m, n = A.getSize()
     if m != n or m == 0:
         raise ProblemError(f"M must be square and non-empty, got shape {(m, n)}")
     if not np.isfinite(A.norm(import_petsc().NormType.FROBENIUS)):
         raise ProblemError("M contains NaN or Inf")
-
-
-def matvec(A, x: np.ndarray) -> np.ndarray:
-    """``A @ x`` for a distributed A and a full-length x held on every rank.  Collective."""
-    X = A.createVecRight()
-    lo, hi = X.getOwnershipRange()
-    X.setArray(x[lo:hi])
-    Y = A.createVecLeft()
-    A.mult(X, Y)
-    out = vec_to_numpy(Y)
-    X.destroy()
-    Y.destroy()
-    return out
-
-
-def max_abs_entry(A) -> float:
-    """``max |a_ij|`` of a distributed matrix.  Collective."""
-    from mpi4py import MPI
-
-    _, _, data = A.getValuesCSR()
-    local = float(np.max(np.abs(data))) if data.size else 0.0
-    return A.getComm().tompi4py().allreduce(local, op=MPI.MAX)
 
 
 def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defaults: dict | None = None,
@@ -139,8 +116,6 @@ def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defau
     PETSc = import_petsc()
     if not isinstance(J, PETSc.Mat):
         # vinewtonssls adds to the diagonal (MatDiagonalSet): store it, explicit zeros included
-        import scipy.sparse as sp
-
         c = sp.coo_matrix(J)
         n = c.shape[0]
         J = sp.csr_matrix((np.concatenate([c.data, np.zeros(n)]),

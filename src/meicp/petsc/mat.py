@@ -1,15 +1,22 @@
-"""Distributed matrices from per-rank CSR rows, and back to SciPy.
+"""Matrices as the solvers meet them: NumPy, SciPy sparse, or a distributed PETSc Mat.
 
-Build each rank's rows with NumPy/SciPy and hand them to ``createAIJ(csr=...)``
-(DESIGN §6: a Python ``setValues`` loop is 40× slower).  Collective on ``comm``.
+Distributed matrices are built from per-rank CSR rows: each rank's rows with NumPy/SciPy
+handed to ``createAIJ(csr=...)`` (DESIGN §6: a Python ``setValues`` loop is 40× slower),
+and gathered back into SciPy.  :func:`is_petsc_mat`, :func:`max_abs_entry`,
+:func:`to_dense` and :func:`matvec` take any of the three kinds: one dispatch for the few
+operations every problem class needs.  Collective on the matrix's (or ``comm``'s)
+communicator when a PETSc Mat is involved.
 """
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 import scipy.sparse as sp
 
-from . import import_petsc, to_petsc_comm
+from . import import_petsc
+from .comm import mpi_comm, to_petsc_comm
 
 
 def ownership(n: int, rank: int, size: int) -> tuple[int, int]:
@@ -52,8 +59,8 @@ def mat_to_scipy(A) -> sp.csr_matrix:
     indptr, indices, data = A.getValuesCSR()
     start, _ = A.getOwnershipRange()
     local = sp.csr_matrix((data, indices, indptr), shape=(A.getLocalSize()[0], A.getSize()[1]))
-    comm = A.getComm().tompi4py()
-    if comm.Get_size() == 1:
+    comm = mpi_comm(A.getComm())
+    if comm is None:
         return local.tocsr()
     coo = local.tocoo()
     rows = comm.allgather(coo.row + start)
@@ -65,9 +72,9 @@ def mat_to_scipy(A) -> sp.csr_matrix:
 
 def vec_to_numpy(v) -> np.ndarray:
     """Gather a PETSc Vec into a NumPy array on every rank.  Collective."""
-    comm = v.getComm().tompi4py()
+    comm = mpi_comm(v.getComm())
     local = v.getArray(readonly=True).copy()
-    if comm.Get_size() == 1:
+    if comm is None:
         return local
     return np.concatenate(comm.allgather(local))
 
@@ -87,3 +94,74 @@ def mat_from_rows(comm, local_rows: sp.csr_matrix, shape: tuple[int, int], local
         comm=pcomm)
     A.assemble()
     return A
+
+
+def is_petsc_mat(M) -> bool:
+    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
+
+
+def max_abs_entry(M) -> float:
+    """``max |m_ij|`` (0 for an empty or zero matrix); collective for a PETSc Mat."""
+    if is_petsc_mat(M):
+        _, _, data = M.getValuesCSR()
+        local = float(np.max(np.abs(data))) if data.size else 0.0
+        comm = mpi_comm(M.getComm())
+        return local if comm is None else max(comm.allgather(local))
+    data = M.data if sp.issparse(M) else np.asarray(M)
+    return float(np.max(np.abs(data))) if data.size else 0.0
+
+
+def to_dense(M) -> np.ndarray:
+    """A dense ndarray (gathered on every rank for a PETSc Mat)."""
+    if is_petsc_mat(M):
+        return mat_to_scipy(M).toarray()
+    return M.toarray() if sp.issparse(M) else np.asarray(M)
+
+
+def matvec(M, x: np.ndarray) -> np.ndarray:
+    """``M @ x`` for a full-length x (held on every rank for a PETSc Mat, collective)."""
+    if not is_petsc_mat(M):
+        return M @ x
+    X = M.createVecRight()
+    lo, hi = X.getOwnershipRange()
+    X.setArray(x[lo:hi])
+    Y = M.createVecLeft()
+    M.mult(X, Y)
+    out = vec_to_numpy(Y)
+    X.destroy()
+    Y.destroy()
+    return out
+
+
+def nonzeros(A, *, total: bool = True) -> dict:
+    """PETSc's nonzero bookkeeping of an AIJ matrix, as ints: ``nz_used``, ``nz_allocated``,
+    ``mallocs`` — summed over the ranks (``total``, collective) or this rank's part."""
+    PETSc = import_petsc()
+    info = A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM if total else PETSc.Mat.InfoType.LOCAL)
+    return {k: int(info[k]) for k in ("nz_used", "nz_allocated", "mallocs")}
+
+
+def storage_bytes(A) -> int:
+    """Bytes of this rank's part of an AIJ matrix: values, column indices and row starts."""
+    PETSc = import_petsc()
+    nnz = nonzeros(A, total=False)["nz_allocated"]
+    m = A.getLocalSize()[0]
+    isz = np.dtype(PETSc.IntType).itemsize
+    return nnz * (np.dtype(PETSc.ScalarType).itemsize + isz) + (m + 1) * isz
+
+
+def diagonal(A):
+    """The diagonal of A as a PETSc Vec distributed like A's rows (the caller destroys it)."""
+    return A.getDiagonal()
+
+
+@contextmanager
+def destroying(*objects):
+    """``with destroying(K, M) as (K, M):`` — the objects, and on exit ``destroy()`` (collective)
+    of those that are PETSc objects; NumPy / SciPy ones and None pass through untouched."""
+    try:
+        yield objects
+    finally:
+        for obj in objects:
+            if type(obj).__module__.startswith("petsc4py"):
+                obj.destroy()

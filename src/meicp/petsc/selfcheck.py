@@ -10,7 +10,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from . import import_petsc, to_petsc_comm
+from . import import_petsc
+from .comm import to_petsc_comm
 from .eigen import solve_ghep
 from .mat import mat_from_local_csr, ownership
 

@@ -33,7 +33,7 @@ def _corners(model: LatticeModel, j0: float, j1: float, i0: float, i1: float) ->
 
 def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 60000,
                  dpi: int = 150) -> Path:
-    """Draw the lattice of ``scene`` (Scene, LatticeModel or path) to the PNG ``path``."""
+    """Draw the lattice of ``scene`` (a Scene or a LatticeModel) to the PNG ``path``."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure

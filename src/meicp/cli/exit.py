@@ -1,0 +1,15 @@
+"""The exit codes of every ``meicp`` command (listed in ``meicp --help``)."""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class Exit(IntEnum):
+    """0 the command answered, 1 no certified answer (a solver failed), 2 bad input or
+    usage, 3 internal error."""
+
+    OK = 0
+    FAILED = 1
+    BAD_INPUT = 2
+    INTERNAL = 3

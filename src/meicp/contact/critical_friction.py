@@ -1,0 +1,281 @@
+"""The critical friction: the smallest μ at which a σ = 0 divergence mode exists,
+``meicp.critical_friction``.  μ becomes the eigenvalue of an EiCP at σ = 0, condensed onto
+the complementarity DOFs and enumerated; the derivation, the singular cases and the
+cost are in ``docs/critical-friction.md``.  Serial SciPy."""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spl
+from scipy.optimize import linprog
+
+from ..core.errors import ConvergenceError, ProblemError
+from ..eicp.problem import EiCPProblem, certify_pair
+from ..eicp.solve import solve_eicp
+from ..lattice.model import LatticeModel
+from ..petsc.assembly import assemble
+from ..petsc.pencil import reduced_pencil
+from ..scene import Scene
+from .instability import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
+from .maps import grazing_cases, reduced_system
+from .problem import contact_states, pencil_of
+
+log = logging.getLogger("meicp")
+
+#: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
+#: complementarity DOFs (order ≤ |J|): 3.3 s at |J| = 17, 15 s at |J| = 19 (about ×2.2 per pair)
+CRITICAL_J = 20
+#: the μ-independent block −A′ (and its Schur complement) counts as singular beyond this
+#: condition number: a motion of (near) zero stiffness, μ_c undefined
+CRITICAL_COND = 1e12
+
+
+def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
+                      condense: bool = True) -> float:
+    """The smallest μ ≥ 0 at which a σ = 0 divergence mode exists for the scene's states
+    (prescribed ones; with ``"solve"`` the states of the static equilibrium at the scene's μ),
+    one μ for every frictional contact.  ``inf`` when there is none up to ``mu_max``.
+
+    scene: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction` also reads a file).
+    Solved as an EiCP in μ, condensed onto its complementarity DOFs
+    (docs/critical-friction.md) and enumerated: all 2^|J| supports of order ≤ |J|, a proof of the smallest μ,
+    for |J| ≤ ``CRITICAL_J`` (20) complementarity pairs per grazing case (ProblemError
+    beyond); the μ_c found is lifted back to the whole reduced lattice and certified there.
+    ``condense=False``: the former enumeration of the whole reduced pencil (order r per
+    support, at most 16 pairs and 600 reduced DOFs; slow, kept for cross-checks).
+
+    A motion of zero stiffness once the slip DOFs are eliminated — a floating body, or a
+    block free to slide as a whole — makes the μ-independent block singular.  If such a
+    motion is compatible with the slip directions (x_J ≥ 0) it is a σ = 0 motion at every μ
+    and μ_c is undefined: ProblemError.  If it is not (e.g. a layer between two sliding
+    contacts slipping in opposite directions), the enumeration meets singular pencils on
+    some supports, so the bisection check is then required (ProblemError if it is too large
+    for the default ``bisection=None``; a warning if ``bisection=False``).
+
+    ``bisection``: cross-check on the σ-problem with the mass (a σ ≥ 0 mode must exist just
+    above μ_c and none just below, each decided by enumerating the whole reduced pencil;
+    ConvergenceError if they disagree).  ``None`` (default): run it when that enumeration is
+    within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9 flops, about ≤ 9 pairs on
+    ~150 reduced DOFs), skip it beyond; ``True``: always; ``False``: never.  Serial.
+    """
+    scene, model, sets = _friction_states(scene)
+    K, _ = assemble(model)
+    best = np.inf
+    small, singular = True, False
+    for case in grazing_cases(sets):
+        red = reduced_system(model, sets, case)
+        # every case counts: the bisection check enumerates the σ-problem of each, with or without J
+        small = small and enumeration_is_small(red.retained.size, red.J.size)
+        if red.J.size == 0:
+            continue
+        A1, B1 = _friction_pencil(K, red, sets)
+        if condense:
+            mu, sing = _smallest_mu_condensed(A1, B1, red.J, mu_max)
+            singular = singular or sing
+        else:
+            mu = _smallest_mu_full(A1, B1, red.J, mu_max)
+        best = min(best, mu)
+    if singular and bisection is None and not small:
+        raise ProblemError("critical_friction: a motion of zero stiffness is left once the slip DOFs are "
+                           "eliminated (not compatible with the slip directions), so the enumeration meets "
+                           "singular pencils and needs the bisection check, but the σ-problem is too large to "
+                           "enumerate; pass bisection=True to run it anyway, or hold the body")
+    if bisection or (bisection is None and small):
+        _check_by_bisection(scene, sets, model, best, mu_max, tol)
+    elif singular:
+        log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
+                    "certified but its minimality is not cross-checked", best)
+    elif bisection is None:
+        log.info("critical_friction: bisection check skipped (the σ-problem is too large to enumerate)")
+    return float(best)
+
+
+def friction_pencils(scene):
+    """The σ = 0 EiCPs in μ of :func:`critical_friction`, condensed onto the
+    complementarity DOFs: one ``(Ac, Bc, J)`` per grazing case with a complementarity pair,
+    for ``(μ Bc − Ac) x = y`` (dense, order |J|).  Raises ProblemError if the μ-independent
+    block is singular.  Serial."""
+    scene, model, sets = _friction_states(scene)
+    K, _ = assemble(model)
+    out = []
+    for case in grazing_cases(sets):
+        red = reduced_system(model, sets, case)
+        if red.J.size == 0:
+            continue
+        Ac, Bc, Jc, _, null = _condense(*_friction_pencil(K, red, sets), red.J)
+        if null.shape[1]:
+            raise ProblemError(_singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular"))
+        out.append((Ac, Bc, Jc))
+    return out
+
+
+def _friction_states(scene):
+    """(scene, model, contact sets) with the states resolved (static equilibrium if asked)."""
+    if not isinstance(scene, Scene):
+        raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
+                           "(meicp.critical_friction also reads a scene file)")
+    model = LatticeModel(scene)
+    sets, static = contact_states(scene, model)
+    if sets is None:
+        raise ConvergenceError(f"static equilibrium failed: {static.message}", static)
+    return scene, model, sets
+
+
+
+
+def _friction_pencil(K, red, sets):
+    """``A′ = −P̃₀ K Q̃``, ``B′ = P̃₁ K Q̃`` (sparse CSR) of the σ = 0 EiCP in μ."""
+    P0 = (red.P - _friction_part(red, sets)).tocsr()
+    return reduced_pencil(K, K, P0, red.Q, red.retained, P_B=red.P_friction)
+
+
+def _smallest_mu_full(A1, B1, J, mu_max):
+    """The former path: enumerate the EiCP in μ on the whole reduced lattice."""
+    if A1.shape[0] > ENUMERATE_N or J.size > ENUMERATE_J:
+        raise ProblemError(f"critical_friction(condense=False) enumerates the whole reduced lattice: reduced size "
+                           f"{A1.shape[0]} (limit {ENUMERATE_N}) / |J| = {J.size} (limit {ENUMERATE_J}) too large")
+    r = solve_eicp(A1.toarray(), B1.toarray(), J=J, method="enumerate", lam_min=0.0, tol=1e-9)
+    mus = [s.lam for s in r.solutions if 0.0 <= s.lam <= mu_max]
+    return min(mus) if mus else np.inf
+
+
+def _condense(A1, B1, J):
+    """Eliminate the rows/columns E where w = 0 and B′ = 0 (no μ in the equation):
+    ``x_E = −A′_EE⁻¹ A′_EC x_C``.  Returns ``(Ac, Bc, Jc, lift, null)``: Jc the positions of
+    J in C, ``lift(x_C)`` the whole reduced x, ``null`` an orthonormal basis (columns) of the
+    null space of −Ac (usually empty).  ProblemError if ``−A′_EE`` is singular: then a
+    motion with x_C = 0 costs no energy, a σ = 0 motion at every μ."""
+    r = A1.shape[0]
+    in_j = np.zeros(r, dtype=bool)
+    in_j[J] = True
+    with_mu = np.diff(B1.indptr) > 0           # rows of B′ with a stored entry
+    keep = in_j | with_mu                       # C: J and any free row that carries μ
+    C, E = np.flatnonzero(keep), np.flatnonzero(~keep)
+    Jc = np.flatnonzero(in_j[C])
+    A_CC, B_CC = A1[C][:, C].toarray(), B1[C][:, C].toarray()
+    if E.size:
+        A_EE = A1[E][:, E].tocsc()
+        singular = f"the μ-independent block −A′_EE ({E.size} DOFs) is singular"
+        try:
+            lu = spl.splu(A_EE)
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise ProblemError(_singular_message(singular)) from exc
+        inv = spl.LinearOperator(A_EE.shape, matvec=lu.solve, rmatvec=lambda v: lu.solve(v, trans="T"),
+                                 dtype=float)
+        cond = spl.norm(A_EE, 1) * spl.onenormest(inv)
+        if not np.isfinite(cond) or cond > CRITICAL_COND:
+            raise ProblemError(_singular_message(f"{singular} (condition ≈ {cond:.1e})"))
+        X_EC = lu.solve(A1[E][:, C].toarray())  # A′_EE⁻¹ A′_EC
+        Ac = A_CC - A1[C][:, E] @ X_EC
+        Bc = B_CC - B1[C][:, E] @ X_EC
+    else:
+        X_EC = np.zeros((0, C.size))
+        Ac, Bc = A_CC, B_CC
+    Ac, Bc = np.asarray(Ac), np.asarray(Bc)
+    # −Ac is the Schur complement of −A′ = Q̃ᵀKQ̃: symmetric positive semidefinite, definite
+    # unless a motion of zero stiffness is left (e.g. a layer sliding as a whole)
+    ev, V = np.linalg.eigh(-0.5 * (Ac + Ac.T))
+    null = V[:, ev <= max(ev[-1], 0.0) / CRITICAL_COND]
+
+    def lift(xc):
+        x = np.zeros(r)
+        x[C] = xc
+        x[E] = -X_EC @ xc
+        return x
+
+    return Ac, Bc, Jc, lift, null
+
+
+def _singular_message(what: str) -> str:
+    return (f"critical_friction: {what}: a motion of zero stiffness exists with the sliding contacts "
+            "held (a floating body, or a block free to slide as a whole), a σ = 0 motion at every μ; "
+            "μ_c is undefined — hold the body (boundary or sticking contacts)")
+
+
+def _sign_feasible(N: np.ndarray) -> bool:
+    """Whether some nonzero x = N c has x ≥ 0 (LP: N c ≥ 0, Σ(N c) = 1), or x = 0 on these
+    rows for some c ≠ 0 (N rank deficient)."""
+    if np.linalg.matrix_rank(N) < N.shape[1]:
+        return True
+    res = linprog(np.zeros(N.shape[1]), A_ub=-N, b_ub=np.zeros(N.shape[0]), A_eq=N.sum(axis=0)[None, :],
+                  b_eq=[1.0], bounds=[(None, None)] * N.shape[1], method="highs")
+    return res.status == 0
+
+
+def _smallest_mu_condensed(A1, B1, J, mu_max):
+    """Smallest μ in [0, mu_max] of ``(μB′ − A′)x = y`` by enumerating the condensed EiCP
+    in ν = 1/μ, certified on the whole reduced pencil.  Returns (μ, singular): ``singular``
+    when −Ac has a null space that is not sign-feasible (the enumeration met singular
+    pencils; the caller must cross-check)."""
+    if J.size > CRITICAL_J:
+        raise ProblemError(f"critical_friction enumerates all 2^|J| supports of the EiCP condensed onto the "
+                           f"contact DOFs: |J| = {J.size} complementarity pairs (slipping or grazing contacts) "
+                           f"exceeds the limit CRITICAL_J = {CRITICAL_J}")
+    Ac, Bc, Jc, lift, null = _condense(A1, B1, J)
+    if null.shape[1] and _sign_feasible(null[Jc]):
+        raise ProblemError(_singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular and its "
+                                             "null space holds a motion with x_J ≥ 0"))
+    if Ac.shape[0] > Jc.size:
+        log.info("critical_friction: %d free rows carry μ and stay in the condensed EiCP", Ac.shape[0] - Jc.size)
+    # μ > 0 ⇔ ν = 1/μ > 0.  μ = 0 is never a solution: −Ac is positive semidefinite and
+    # x_J ≥ 0 with xᵀ(−Ac)x = xᵀy = 0 only for x in its null space, excluded just above
+    r = solve_eicp(-Bc, -Ac, J=Jc, method="enumerate", lam_min=1.0 / mu_max if mu_max > 0 else np.inf,
+                   tol=1e-9)
+    nus = [s for s in r.solutions if s.lam > 0 and 1.0 / s.lam <= mu_max]
+    if not nus:
+        return np.inf, bool(null.shape[1])
+    sol = max(nus, key=lambda s: s.lam)
+    mu = 1.0 / sol.lam
+    full = certify_pair(EiCPProblem.from_data(A1, B1, J), mu, lift(sol.x))
+    if full.residual > 1e-9:
+        raise ConvergenceError(f"critical_friction: μ_c = {mu:.10g} of the condensed EiCP fails the certificate on "
+                               f"the whole reduced lattice (residual {full.residual:.1e})", r)
+    return mu, bool(null.shape[1])
+
+
+def _friction_part(red, sets):
+    """μ·P₁ with each contact's own μ (the part of P̃ proportional to friction)."""
+    mus = np.zeros(red.P.shape[0])
+    for k, (name, _, kind) in enumerate(red.pair_of):
+        if kind == "t":
+            mus[red.J[k]] = next(cs.friction for cs in sets if cs.name == name)
+    return sp.diags(mus) @ red.P_friction
+
+
+def _has_mode(scene, sets, model, mu) -> bool:
+    """Whether a σ ≥ 0 mode exists with every contact's friction set to μ (enumeration)."""
+    scaled = [dataclasses.replace(cs, friction=mu) for cs in sets]
+    K, M = assemble(model)
+    for case in grazing_cases(scaled):
+        pen = pencil_of(K, M, model, scaled, case)
+        if pen.A is None:
+            continue  # every DOF held: no mode (as in analyze)
+        r = solve_eicp(pen.A.toarray(), pen.B.toarray(), J=pen.J, method="enumerate", lam_min=0.0)
+        if r.solutions:
+            return True
+    return False
+
+
+def _check_by_bisection(scene, sets, model, mu_c, mu_max, tol):
+    """Existence of a σ ≥ 0 mode must switch on at μ_c: none just below, one at/above it."""
+    if np.isfinite(mu_c):
+        below = mu_c * (1 - 1e-6) - 1e-12
+        if below >= 0 and _has_mode(scene, sets, model, below):
+            # bisect down to see where existence really starts
+            lo, hi = 0.0, below
+            if _has_mode(scene, sets, model, 0.0):
+                raise ConvergenceError(f"a σ ≥ 0 mode exists at μ = 0 although μ as an eigenvalue gave {mu_c}")
+            while hi - lo > tol * max(1.0, hi):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if _has_mode(scene, sets, model, mid) else (mid, hi)
+            raise ConvergenceError(f"bisection finds modes from μ ≈ {hi:.8g}, below μ_c = {mu_c:.8g}")
+        if not _has_mode(scene, sets, model, mu_c * (1 + 1e-6) + 1e-12):
+            raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
+                                   "existence disagree")
+    elif _has_mode(scene, sets, model, mu_max):
+        raise ConvergenceError(f"μ as an eigenvalue found no μ_c ≤ {mu_max}, but a mode exists at μ = {mu_max}")
+

@@ -1,0 +1,86 @@
+"""``static_equilibrium``: the contact states of a scene under its load, by the condensed or
+the mixed formulation (docs/static-equilibrium.md)."""
+
+from __future__ import annotations
+
+import time
+
+from ...core.errors import ProblemError
+from ...lattice.model import LatticeModel
+from ...lcp.problem import DEFAULT_TOL as LCP_TOL
+from ...scene import Scene
+from .condensed import MAX_CONTACTS, solve_condensed
+from .data import static_data
+from .mixed import solve_mixed
+from .result import StaticResult
+
+#: default relative tolerance of the state classification (docs/static-equilibrium.md)
+TOL = 1e-9
+#: formulation="auto" uses the condensed (dense) path up to this many contacts, else mixed
+AUTO_CONDENSED_LIMIT = 200
+FORMULATIONS = ("auto", "condensed", "mixed")
+
+
+def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "auto",
+                       classify_limit: int = 12, lcp_tol: float = LCP_TOL,
+                       allow_floating: bool = True, formulation: str = "auto", comm=None,
+                       petsc_options: dict | None = None, **lcp_options) -> StaticResult:
+    """Static frictional equilibrium of ``scene`` under its ``[load]``; every contact's state.
+
+    scene: a :class:`~meicp.scene.Scene`; model: its
+    :class:`~meicp.lattice.model.LatticeModel` if already built.  Every contact set of the
+    scene (rigid base, frictional interfaces) is solved together, whatever its ``states``
+    key says (the sets interact; the caller picks the sets it asked to solve).
+
+    tol: relative classification tolerance; method: passed to :func:`meicp.solve_lcp`
+    (``auto`` = dense Lemke here, with fallbacks); lcp_tol: its certificate tolerance;
+    classify_limit: ``exact_limit`` of :func:`meicp.classify` on the LCP matrix;
+    allow_floating: condense rigid components held by contact instead of raising.
+
+    formulation: ``"condensed"`` (dense compliance, Lemke; classifies the LCP matrix),
+    ``"mixed"`` (sparse, displacements kept, PETSc SNES VI + certified polish; no matrix
+    classes; options ``petsc_options`` under ``-meicp_static_``) or ``"auto"`` (condensed up
+    to :data:`AUTO_CONDENSED_LIMIT` contacts, else mixed).  comm: with several ranks the
+    mixed formulation's PETSc solves are distributed over it (collective then: every rank
+    calls with the same scene); the condensed formulation ignores it.
+
+    Deterministic: under MPI every rank may call it with the same scene and gets the same
+    answer.  Raises :class:`ProblemError` before any solve for a scene with no contact set
+    ("a load with no contact"), a bad load, more than :data:`MAX_CONTACTS` contacts for the
+    condensed formulation, or a singular stiffness.  A failed LCP is not an exception:
+    ``status`` comes from the LCP and no states are reported.  The formulations, tolerances
+    and what each error means: docs/static-equilibrium.md.
+    """
+    t_start = time.perf_counter()
+    timings = {}
+    if not isinstance(scene, Scene):
+        raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
+                           "(read a scene file with meicp.load_scene)")
+    if not (tol > 0 and tol < 1):
+        raise ProblemError(f"tol must be in (0, 1), got {tol!r}")
+    has_base = scene.boundary.bottom == "contact"
+    if not has_base and not scene.frictional_interfaces():
+        what = "a load with no contact" if scene.load is not None else "no contact"
+        raise ProblemError(f"static equilibrium: {what}: the scene has no contact set (boundary.bottom "
+                           f"is {scene.boundary.bottom!r}, not \"contact\", and no interface is "
+                           "frictional), so there are no contact states to solve for")
+    if has_base and scene.contact is None:
+        raise ProblemError("contact: required when boundary.bottom = \"contact\"")
+    nsets = int(has_base) + len(scene.frictional_interfaces())
+    nc_total = nsets * scene.nx
+    if formulation not in FORMULATIONS:
+        raise ProblemError(f"formulation must be 'auto', 'condensed' or 'mixed', got {formulation!r}")
+    if formulation == "auto":
+        formulation = "condensed" if nc_total <= AUTO_CONDENSED_LIMIT else "mixed"
+    if formulation == "condensed" and nc_total > MAX_CONTACTS:
+        raise ProblemError(f"static equilibrium: {nc_total} contacts exceed the condensed dense "
+                           f"formulation's limit of {MAX_CONTACTS}; use formulation=\"mixed\" (the "
+                           "sparse mixed formulation)")
+    model = model if model is not None else LatticeModel(scene)
+    if not isinstance(model, LatticeModel) or (model.scene is not scene and model.scene != scene):
+        raise ProblemError("model must be the LatticeModel of this scene")
+    data = static_data(scene, model, tol=tol, allow_floating=allow_floating, timings=timings)
+    if formulation == "mixed":
+        return solve_mixed(data, comm=comm, petsc_options=petsc_options, timings=timings, t_start=t_start)
+    return solve_condensed(data, method=method, lcp_tol=lcp_tol, classify_limit=classify_limit,
+                           lcp_options=lcp_options, timings=timings, t_start=t_start)

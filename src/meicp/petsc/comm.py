@@ -1,0 +1,35 @@
+"""Communicators: the one place where a caller's ``comm`` is made canonical.
+
+Every collective function of meicp takes ``comm`` as ``None`` (this process alone), an
+mpi4py communicator or a PETSc one.  :func:`mpi_comm` turns any of them into the one form
+the rest of the code tests and passes on: an mpi4py communicator when it spans several
+ranks, else ``None`` (serial: nothing to distribute, gather or broadcast).
+:func:`to_petsc_comm` is the form PETSc objects are created on.
+"""
+
+from __future__ import annotations
+
+from . import import_petsc
+
+
+def mpi_comm(comm):
+    """The mpi4py communicator of ``comm`` (None, mpi4py or PETSc) when it has several
+    ranks, else None."""
+    if comm is None:
+        return None
+    if hasattr(comm, "tompi4py"):
+        comm = comm.tompi4py()
+    return comm if comm.Get_size() > 1 else None
+
+
+def comm_size(comm) -> int:
+    """Ranks of ``comm`` (None, mpi4py or PETSc); 1 for None."""
+    mcomm = mpi_comm(comm)
+    return 1 if mcomm is None else mcomm.Get_size()
+
+
+def to_petsc_comm(comm):
+    """The PETSc communicator to create objects on: ``COMM_SELF`` when serial."""
+    PETSc = import_petsc()
+    mcomm = mpi_comm(comm)
+    return PETSc.COMM_SELF if mcomm is None else PETSc.Comm(mcomm)

@@ -1,0 +1,42 @@
+"""The MEiCP pencil ``A = −P K Q``, ``B = P M Q`` from the lattice's K, M and the contact maps
+P (rows) and Q (columns), for any layout: SciPy products when K is a SciPy matrix, PETSc
+matrix products on the lattice's row bands when it is a distributed Mat."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .mat import is_petsc_mat, mat_from_rows
+
+
+def reduced_pencil(K, M, P, Q, retained: np.ndarray, P_B=None):
+    """``(A, B)`` with ``A = −P K Q``, ``B = P_B M Q`` (``P_B = P`` by default: the MEiCP
+    pencil; the critical friction's pencil in μ has ``M = K`` and ``P_B`` the friction rows).
+
+    P, P_B (r × n) and Q (n × r): SciPy matrices every rank holds, in natural numbering;
+    ``retained``: the natural DOF of each of the r reduced DOFs, sorted.  K, M SciPy: CSR
+    results.  K, M PETSc (collective on their communicator): Q gets K's row bands and each
+    reduced DOF is owned by the rank of its node, two sparse products per matrix; the
+    caller destroys A and B."""
+    P_B = P if P_B is None else P_B
+    if not is_petsc_mat(K):
+        return -(P @ K @ Q).tocsr(), (P_B @ M @ Q).tocsr()
+    comm = K.getComm()
+    lo, hi = K.getOwnershipRange()
+    r_lo, r_hi = np.searchsorted(retained, [lo, hi])
+    n, r = K.getSize()[0], retained.size
+    Qm = mat_from_rows(comm, Q[lo:hi], (n, r), int(r_hi - r_lo))
+    Pm = mat_from_rows(comm, P[r_lo:r_hi], (r, n), hi - lo)
+    PBm = Pm if P_B is P else mat_from_rows(comm, P_B[r_lo:r_hi], (r, n), hi - lo)
+    try:
+        KQ, MQ = K.matMult(Qm), M.matMult(Qm)
+        A, B = Pm.matMult(KQ), PBm.matMult(MQ)
+        A.scale(-1.0)
+        KQ.destroy()
+        MQ.destroy()
+    finally:
+        Qm.destroy()
+        Pm.destroy()
+        if PBm is not Pm:
+            PBm.destroy()
+    return A, B
