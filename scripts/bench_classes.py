@@ -9,19 +9,12 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
-
-from meicp.lcp.classes import CLASS_NAMES, classify  # noqa: E402
+from bench_common import csv_path, write_rows
+from meicp.lcp.classes import CLASS_NAMES, classify
 
 FAMILIES = {
     # every class true: no early exit, the slowest case for the exact tests
@@ -36,7 +29,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", nargs="+", type=int, default=list(range(2, 13)) + [20, 100, 1000])
     args = p.parse_args()
-    out = bench_csv.csv_path("classes")
+    out = csv_path("classes")
     rng = np.random.default_rng(0)
     rows = []
     for n in args.sizes:
@@ -52,7 +45,7 @@ def main():
             rows.append(dict(n=n, family=family, exact=n <= 12, median_s=f"{statistics.median(times):.4g}",
                              max_s=f"{max(times):.4g}", undecided=undecided))
             print(rows[-1], flush=True)
-    bench_csv.write_rows(out, rows, list(rows[0]), keep=lambda r: False)
+    write_rows(out, rows, list(rows[0]), keep=lambda r: False)
     print(f"wrote {out}")
 
 

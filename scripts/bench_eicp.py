@@ -20,35 +20,32 @@ Krylov–Schur solve (MUMPS) of the full pencil with the same options, from scra
 from __future__ import annotations
 
 import argparse
-import resource
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
+import scipy.linalg
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
+import meicp
+from bench_common import csv_path, peak_rss_bytes, slepc_eigensolve, write_rows
+from bench_scenes import halves, two_layer_scene
+from meicp.lattice.model import LatticeModel
+from meicp.petsc.assembly import principal_submatrix
 
-import bench_csv  # noqa: E402
-OUT = bench_csv.csv_path("eicp")
+OUT = csv_path("eicp")
 FIELDS = ["experiment", "problem", "n", "J", "method", "settings", "ranks", "wall_s", "iterations",
           "status", "solutions", "residual", "error", "peak_rss_mb"]
 
 
 def peak_mb(comm) -> float:
-    from mpi4py import MPI
-
-    mine = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return comm.allreduce(mine, op=MPI.MAX)
+    """The largest peak resident set of the ranks so far, MB."""
+    return max(comm.allgather(peak_rss_bytes() / 2**20))
 
 
-def write_rows(rows, comm):
+def append_rows(rows, comm):
     if comm.rank != 0 or not rows:
         return
-    bench_csv.write_rows(OUT, rows, FIELDS)
+    write_rows(OUT, rows, FIELDS)
     print(f"appended {len(rows)} rows to {OUT}")
 
 
@@ -60,15 +57,13 @@ def z_family(n, seed=0):
 
 
 def bench_enumerate(args, comm):
-    import meicp
-
     rows = []
     for n in args.sizes:
         A, B = z_family(n)
         comm.Barrier()
         t0 = time.perf_counter()
         r = meicp.solve_eicp(A, B, method="enumerate", comm=comm if comm.size > 1 else None)
-        wall = comm.allreduce(time.perf_counter() - t0, op=__import__("mpi4py.MPI").MPI.MAX)
+        wall = max(comm.allgather(time.perf_counter() - t0))
         ok = len(r.solutions) == 2 ** n - 1
         res = max(s.residual for s in r.solutions)
         rows.append(dict(experiment="enumerate", problem=f"z_family_{n}", n=n, J=n, method="enumerate",
@@ -78,34 +73,13 @@ def bench_enumerate(args, comm):
         if comm.rank == 0:
             print(f"z_family n={n}: {len(r.solutions)} solutions (expected {2 ** n - 1}) in {wall:.2f} s "
                   f"on {comm.size} rank(s), max residual {res:.1e}", flush=True)
-    write_rows(rows, comm)
+    append_rows(rows, comm)
 
 
 def lattice_pencil(nx, comm, dofs="y"):
     """(A = −K_ff, B = M_ff, J) as PETSc Mats on comm; J in reduced numbering."""
-    import meicp
-    from meicp.io.scene import loads_scene
-    from meicp.lattice.model import LatticeModel
-    from meicp.petsc.assembly import principal_submatrix
-
     ny = nx // 2
-    scene = loads_scene(f"""
-[lattice]
-nx = {nx}
-[[layers]]
-name = "A"
-rows = {ny // 2}
-stiffness = 1.0
-density = 1.0
-[[layers]]
-name = "B"
-rows = {ny - ny // 2}
-stiffness = 5.0
-density = 2.0
-[boundary]
-bottom = "fixed"
-top = "fixed"
-""", source=f"bench lattice nx={nx}")
+    scene = two_layer_scene(nx, halves(ny), bottom="fixed")
     model = LatticeModel(scene)
     K, M = meicp.assemble(model, comm)
     free = model.free_dofs()
@@ -121,41 +95,25 @@ top = "fixed"
 
 
 def bench_lattice(args, comm):
-    from mpi4py import MPI
-
-    from meicp.eicp.solve import solve_eicp
-    from meicp.petsc import import_slepc
-    from meicp.petsc.options import OptionsScope
-
-    SLEPc = import_slepc()
     rows = []
     t0 = time.perf_counter()
     A, B, J = lattice_pencil(args.nx, comm, args.dofs)
-    t_build = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    t_build = max(comm.allgather(time.perf_counter() - t0))
     n = A.getSize()[0]
     if comm.rank == 0:
         print(f"lattice pencil: n = {n}, |J| = {J.size}, built in {t_build:.2f} s", flush=True)
-    opts = {"eps_nev": args.nev, "eps_target": 0.0, "eps_target_real": True, "eps_tol": 1e-12,
-            "st_type": "sinvert", "st_ksp_type": "preonly", "st_pc_type": "lu",
-            "st_pc_factor_mat_solver_type": "mumps", "eps_gen_hermitian": True}
     single, active = [], []
     for rep in range(args.repeat):
         comm.Barrier()
         t0 = time.perf_counter()
-        eps = SLEPc.EPS().create(comm=A.getComm())
-        eps.setOperators(A, B)
-        with OptionsScope("bench_single_", opts):
-            eps.setOptionsPrefix("bench_single_")
-            eps.setFromOptions()
-            eps.solve()
-        nconv = eps.getConverged()
-        lam0 = eps.getEigenvalue(0).real if nconv else float("nan")
-        eps.destroy()
-        single.append(comm.allreduce(time.perf_counter() - t0, op=MPI.MAX))
+        vals, _ = slepc_eigensolve(A, B, args.nev, hermitian=True)
+        nconv = vals.size
+        lam0 = vals[0].real if nconv else float("nan")
+        single.append(max(comm.allgather(time.perf_counter() - t0)))
         comm.Barrier()
         t0 = time.perf_counter()
-        r = solve_eicp(A, B, J=J, method="active-set", target=0.0, nev=args.nev)
-        active.append(comm.allreduce(time.perf_counter() - t0, op=MPI.MAX))
+        r = meicp.solve_eicp(A, B, J=J, method="active-set", target=0.0, nev=args.nev)
+        active.append(max(comm.allgather(time.perf_counter() - t0)))
         if comm.rank == 0:
             print(f"  repeat {rep}: single solve {single[-1]:.2f} s (λ0 = {lam0:.6e}, {nconv} converged); "
                   f"active-set {active[-1]:.2f} s, {r.status}, λ = {r.lam}, "
@@ -175,16 +133,12 @@ def bench_lattice(args, comm):
               f"ratio {statistics.median(active) / statistics.median(single):.2f}, peak RSS {mem:.0f} MB/rank")
     A.destroy()
     B.destroy()
-    write_rows(rows, comm)
+    append_rows(rows, comm)
 
 
 def bench_accuracy(args, comm):
     """Active-set and enumeration λ against a dense reference (eigvals of the certified
     support's pencil in extended care: numpy on the support), on random mixed problems."""
-    import scipy.linalg
-
-    import meicp
-
     rows = []
     rng = np.random.default_rng(7)
     for k in range(args.cases):
@@ -218,7 +172,7 @@ def bench_accuracy(args, comm):
             ok = [r for r in sel if r["status"] == "solved"]
             print(f"{method}: {len(ok)}/{len(sel)} solved, max λ error "
                   f"{max(float(r['error']) for r in ok):.1e}, max residual {max(float(r['residual']) for r in ok):.1e}")
-    write_rows(rows, comm)
+    append_rows(rows, comm)
 
 
 def main():

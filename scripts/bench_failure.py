@@ -45,21 +45,22 @@ reference set.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import itertools
-import sys
 import time
+import tomllib
 import warnings
-from pathlib import Path
 
 import numpy as np
 import scipy.linalg as sla
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
+import meicp
+from bench_common import csv_path, write_rows
+from bench_scenes import two_layer_scene
+from meicp.contact import pencil as meicp_pencil
+from meicp.contact.static import prescribed_displacements
+from meicp.core.errors import ConvergenceError, ProblemError
+from meicp.lattice.model import LatticeModel
+from meicp.lcp.siconos import siconos_solve
 
 FIELDS = ["sweep", "problem", "param", "method", "settings", "ranks", "wall_s", "iterations", "status",
           "outcome", "error", "reference", "answer", "residual", "classes", "detail"]
@@ -72,31 +73,18 @@ SICONOS = ("lemke", "enum", "newton-fb", "pgs")
 
 # ----------------------------------------------------------------------------- scenes
 
-def scene_text(mu=3.0, kB=5.0, shear=0.0, states='"slip+"'):
-    t = (ROOT / "data/scenes/two_layers.toml").read_text()
-    for old, new in (("friction = 3.0", f"friction = {mu!r}"), ("stiffness = 5.0", f"stiffness = {kB!r}"),
-                     ("shear = 0.0 ", f"shear = {shear!r} "), ('states = "slip+"', f"states = {states}")):
-        assert old in t, old
-        t = t.replace(old, new)
-    return t
-
-
-def scene(**kw):
-    from meicp.io.scene import loads_scene
-
-    return loads_scene(scene_text(**kw))
+def scene(mu=3.0, kB=5.0, shear=0.0, states='"slip+"'):
+    """data/scenes/two_layers.toml (nx = 5, 2 + 2 rows, top held, load, eps_tol = 1e-10) with
+    its friction μ, upper stiffness k_B, shear and base states (a TOML value) replaced."""
+    return two_layer_scene(5, (2, 2), mu=mu, stiffness=(1.0, kB), shear=shear,
+                           states=tomllib.loads(f"states = {states}")["states"], load=(0.06, -0.1),
+                           petsc={"eps_tol": 1e-10}, title="two layers on a rough base")
 
 
 def pencil(sc):
     """(A, B, J) of the scene's contact states, dense: A = −PKQ, B = PMQ."""
-    from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.petsc.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
-    model = LatticeModel(sc)
-    K, M = assemble(model)
-    red = reduced_system(model, contact_sets(sc, model))
-    return -(red.P @ K @ red.Q).toarray(), (red.P @ M @ red.Q).toarray(), red.J
+    pen = meicp_pencil(sc)
+    return pen.A.toarray(), pen.B.toarray(), pen.J
 
 
 # ----------------------------------------------------------------------------- references
@@ -213,9 +201,6 @@ def _lam_error(got, ref):
 
 
 def run_eicp_methods(A, B, J, ref, lam_min, common, rows, methods=EIG_METHODS):
-    import meicp
-    from meicp.core.errors import ProblemError
-
     for method in methods:
         t0 = time.perf_counter()
         try:
@@ -243,8 +228,6 @@ def run_analyze(sc, ref, common, rows, mu=None, mu_c_ref=None):
 
 
 def _run_analyze(sc, ref, common, rows, method):
-    import meicp
-
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -266,14 +249,11 @@ def _run_analyze(sc, ref, common, rows, method):
 
 
 def _run_critical_friction(sc, ref, common, rows, mu, mu_c_ref):
-    import meicp
-    from meicp.core.errors import ConvergenceError
-
     t0 = time.perf_counter()
     try:
         mc = meicp.critical_friction(sc)
         status = "solved"
-    except ConvergenceError as exc:
+    except ConvergenceError:
         mc, status = float("nan"), "convergence_error"
     wall = time.perf_counter() - t0
     if not np.isfinite(mc) and status != "solved":
@@ -358,8 +338,6 @@ def sweep_degenerate(quick):
         # enumerate must find every (support, λ) pair, not only every λ value
         for r in rows[-4:]:
             if r["method"] == "enumerate" and r["outcome"] == "correct":
-                import meicp
-
                 res = meicp.solve_eicp(A, B, J=J, method="enumerate")
                 got = {tuple(int(j) for j in s.support) for s in res.solutions}
                 if len(res.solutions) != len(ref) or got != {S for _, S in ref}:
@@ -432,13 +410,9 @@ def sweep_flutter(quick):
 def slip_lcp_data():
     """G_nn, G_nt, c_n of the two_layers lattice: gap and slip of the base nodes per unit
     normal / tangential reaction (condensed compliance), and the gap under the load."""
-    from meicp.contact.static import prescribed_displacements
-    from meicp.petsc.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
     sc = scene(mu=3.0)
     m = LatticeModel(sc)
-    K, _ = assemble(m)
+    K, _ = meicp.assemble(m)
     K = K.toarray()
     presc, up, _ = prescribed_displacements(m, sc.load)
     free = m.free_dofs()
@@ -491,10 +465,6 @@ def _x_error(x, ref):
 
 
 def sweep_lcp(quick):
-    import meicp
-    from meicp.core.errors import ProblemError
-    from meicp.lcp.siconos import siconos_solve
-
     data = Gnn, Gnt, cn = slip_lcp_data()
 
     def min_minor(mu):  # brute force over the 31 principal minors (independent of classify)
@@ -558,11 +528,11 @@ def main(argv=None):
     p.add_argument("--sweeps", nargs="+", choices=sorted(SWEEPS), default=list(SWEEPS))
     args = p.parse_args(argv)
     t0 = time.perf_counter()
-    out = bench_csv.csv_path("failure")
+    out = csv_path("failure")
     for name in args.sweeps:
         rows = SWEEPS[name](args.quick)
         # one sweep's rows replace that sweep's old rows (re-running one sweep keeps the others)
-        bench_csv.write_rows(out, rows, FIELDS, keep=lambda r, name=name: r["sweep"] != name)
+        write_rows(out, rows, FIELDS, keep=lambda r, name=name: r["sweep"] != name)
         counts = {}
         for r in rows:
             counts[r["outcome"]] = counts.get(r["outcome"], 0) + 1

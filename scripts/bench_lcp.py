@@ -22,24 +22,20 @@ Under ``mpirun -n 2`` only the distributed PETSc methods run (newton, tao) on th
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
-
-from meicp.io.problem_files import read_siconos_lcp  # noqa: E402
-from meicp.lcp.solve import solve_lcp  # noqa: E402
-from meicp.petsc.selfcheck import laplacian_rows  # noqa: E402
+import meicp
+from bench_common import ROOT, csv_path, timed, write_rows
+from bench_scenes import two_layer_scene
+from meicp.io.problem_files import read_siconos_lcp
+from meicp.lcp.siconos import siconos_solve
+from meicp.lcp.solve import solve_lcp
+from meicp.petsc.mat import mat_from_local_csr, ownership
+from meicp.petsc.selfcheck import laplacian_rows
 
 FIELDS = ["family", "problem", "n", "method", "settings", "ranks", "wall_s", "iterations",
           "status", "residual", "error"]
@@ -54,27 +50,9 @@ def laplacian(m: int):
 
 def lattice(nx: int):
     """The two-layer lattice K restricted to the y DOFs of its free nodes (sparse SPD)."""
-    from meicp.io.scene import loads_scene
-    from meicp.lattice.assembly import assemble
-
     ny = max(2, nx // 2)
-    scene = loads_scene(f"""
-[lattice]
-nx = {nx}
-[[layers]]
-name = "A"
-rows = {ny - ny // 2}
-stiffness = 1.0
-density = 1.0
-[[layers]]
-name = "B"
-rows = {ny // 2}
-stiffness = 5.0
-density = 2.0
-[boundary]
-top = "fixed"
-""", source="bench")
-    K, _ = assemble(scene)
+    scene = two_layer_scene(nx, (ny - ny // 2, ny // 2), bottom="free")
+    K, _ = meicp.assemble(scene)
     y = 2 * np.arange(nx * (ny - 1)) + 1  # y DOFs below the held top row
     M = K[y][:, y].tocsr()
     q = np.random.default_rng(nx).standard_normal(y.size)
@@ -96,15 +74,6 @@ def condensed(n_contacts: int, height: int = 20):
     return S, q
 
 
-def timed(fn, repeat):
-    times, result = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), result
-
-
 def row(family, problem, n, method, settings, ranks, wall, r, ref):
     err = ""
     if r.x is not None and ref is not None:
@@ -115,8 +84,6 @@ def row(family, problem, n, method, settings, ranks, wall, r, ref):
 
 
 def serial_runs(args):
-    from meicp.lcp.siconos import siconos_solve
-
     rows = []
     problems = []
     if "siconos" in args.families:
@@ -149,7 +116,7 @@ def serial_runs(args):
                 continue  # PGS needs symmetric positive-diagonal M, which most of the set is not
             try:
                 kw = {"max_iter": args.pgs_sweeps} if method == "pgs" else {}
-                wall, r = timed(lambda: solve_lcp(M, q, method=method, **kw), args.repeat)
+                wall, _, r = timed(lambda: solve_lcp(M, q, method=method, **kw), repeats=args.repeat)
             except Exception as exc:  # noqa: BLE001 - a benchmark records failures
                 print(f"{name} {method}: {type(exc).__name__}: {exc}", file=sys.stderr)
                 continue
@@ -157,7 +124,7 @@ def serial_runs(args):
             if r.success and ref is None:
                 ref = r.x
         for solver in theirs:
-            wall, r = timed(lambda: siconos_solve(M, q, solver), args.repeat if n < 500 else 1)
+            wall, _, r = timed(lambda: siconos_solve(M, q, solver), repeats=args.repeat if n < 500 else 1)
             results.append(("siconos-" + solver, wall, r))
         for method, wall, r in results:
             rows.append(row(family, name, n, method, "tol=1e-10", 1, wall, r, ref))
@@ -166,8 +133,6 @@ def serial_runs(args):
 
 
 def distributed_runs(args, comm):
-    from meicp.petsc.mat import mat_from_local_csr, ownership
-
     rows = []
     for m in args.laplacian_sides:
         n = m * m
@@ -177,8 +142,8 @@ def distributed_runs(args, comm):
         q = np.random.default_rng(m).standard_normal(n)
         for method in ("newton", "tao"):
             comm.Barrier()
-            wall, r = timed(lambda: solve_lcp(A, q, method=method), args.repeat)
-            wall = comm.allreduce(wall, op=__import__("mpi4py.MPI").MPI.MAX)
+            wall, _, r = timed(lambda: solve_lcp(A, q, method=method), repeats=args.repeat)
+            wall = max(comm.allgather(wall))
             rows.append(row("laplacian", f"laplacian_{n}", n, "meicp-" + method, "tol=1e-10",
                             comm.size, wall, r, None))
             if comm.rank == 0:
@@ -189,7 +154,7 @@ def distributed_runs(args, comm):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--out", default=str(bench_csv.csv_path("lcp")))
+    p.add_argument("--out", default=str(csv_path("lcp")))
     p.add_argument("--append", action="store_true")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--families", nargs="+", default=["siconos", "condensed", "laplacian", "lattice"])
@@ -209,7 +174,7 @@ def main():
     comm = MPI.COMM_WORLD
     rows = serial_runs(args) if comm.size == 1 else distributed_runs(args, comm)
     if comm.rank == 0:
-        bench_csv.write_rows(args.out, rows, FIELDS, keep=lambda r: args.append)
+        write_rows(args.out, rows, FIELDS, keep=lambda r: args.append)
         print(f"wrote {len(rows)} rows to {args.out}")
 
 

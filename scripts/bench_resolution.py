@@ -25,7 +25,7 @@ smallest μ, up to its limit of 20 pairs, n ≤ 18), timed without its bisection
 n ≤ 8 also with the check (its default there) and by its former uncondensed path
 (``condense=False``) side by side; and at n = 4, 8, …, 256 (beyond the limit from n = 32) by
 the smallest μ with a certified full-support solution of the same condensed EiCP
-(``meicp.contact.instability.friction_pencils``; the support at which every enumerated level
+(``meicp.contact.critical_friction.friction_pencils``; the support at which every enumerated level
 attains μ_c; not a proof of minimality).  Richardson
 extrapolation from the three finest dyadic levels gives the limit and the observed order
 (or, when the differences grow, the growth exponent).  Controls: the same block with its
@@ -45,19 +45,18 @@ import argparse
 import json
 import math
 import os
-import resource
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
+import scipy.linalg as sl
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
+import meicp
+from bench_common import Stage, csv_path, write_rows
+from bench_scenes import two_layer_scene
+from meicp.contact import pencil
+from meicp.contact.critical_friction import friction_pencils
 
 FIELDS = ["part", "problem", "quantity", "method", "settings", "ranks", "n", "nx", "ny", "spacing", "dofs",
           "retained", "complementarity", "repeat", "wall_s", "iterations", "status", "value", "sigma",
@@ -74,29 +73,14 @@ SHIFT = {FEATURE_N: None, BIG_N: 20.0}
 
 
 # ---------------------------------------------------------------------------- the scene
-def scene_dict(n: int, *, mu: float = MU, states="slip+", interface=None, solver=None, sides="free") -> dict:
+def make_scene(n: int, *, mu: float = MU, states="slip+", interface=None, solver=None, sides="free"):
     """The physical scene of part A meshed with n cells across (a = W/n)."""
     a = W / n
     ny = round(H / a) + 1
     rows_a = round(Y_INTERFACE / a)   # nodes with y < 2 are layer A; the A–B bonds straddle y = 2 − a/2
-    d = {"title": f"two layers 4x4 on a rough base, n={n}",
-         "lattice": {"nx": n + 1, "spacing": a},
-         "layers": [{"name": "A", "rows": rows_a, "stiffness": 1.0, "density": 1.0 / a},
-                    {"name": "B", "rows": ny - rows_a, "stiffness": 5.0, "density": 2.0 / a}],
-         "boundary": {"top": "fixed", "bottom": "contact", "left": sides, "right": sides},
-         "contact": {"friction": mu, "states": states},
-         "load": {"top_displacement": TOP_DISPLACEMENT}}
-    if interface:
-        d["interfaces"] = [dict(below="A", **interface)]
-    if solver:
-        d["solver"] = solver
-    return d
-
-
-def make_scene(n: int, **kw):
-    from meicp.io.scene import scene_from_dict
-
-    return scene_from_dict(scene_dict(n, **kw))
+    return two_layer_scene(n + 1, (rows_a, ny - rows_a), spacing=a, density=(1.0 / a, 2.0 / a), mu=mu,
+                           states=states, load=TOP_DISPLACEMENT, sides=sides, interface=interface,
+                           solver=solver, title=f"two layers 4x4 on a rough base, n={n}")
 
 
 def geometry(n):
@@ -109,21 +93,13 @@ def geometry(n):
 def dense_lambda(scene):
     """Independent check: the largest real σ > 0 of the reduced pencil (dense SciPy eig)
     whose eigenvector has x_J > 0 (the full-support MEiCP solutions), and its time."""
-    import scipy.linalg as sl
-
-    from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.lattice.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
     t0 = time.perf_counter()
-    model = LatticeModel(scene)
-    red = reduced_system(model, contact_sets(scene, model))
-    K, M = assemble(model)
-    A, B = -(red.P @ K @ red.Q).toarray(), (red.P @ M @ red.Q).toarray()
+    pen = pencil(scene)
+    A, B = pen.A.toarray(), pen.B.toarray()
     ev, V = sl.eig(A, B)
     best = -np.inf
     for k in np.flatnonzero(np.isfinite(ev) & (np.abs(ev.imag) <= 1e-9 * np.abs(ev[np.isfinite(ev)]).max())):
-        x = V[:, k].real[red.J]
+        x = V[:, k].real[pen.J]
         x = x if x.sum() > 0 else -x
         if ev[k].real > 0 and x.min() > 0:
             best = max(best, ev[k].real)
@@ -133,8 +109,6 @@ def dense_lambda(scene):
 def lambda_level(n, sigmas, dense_max_r):
     """analyze() at level n; for the active-set levels the shift is guessed from the coarser
     levels (σ grows under refinement) and widened until a certified mode is found."""
-    import meicp
-
     scene = make_scene(n)
     geo = geometry(n)
     guesses = [None]
@@ -153,7 +127,7 @@ def lambda_level(n, sigmas, dense_max_r):
         if r.modes:
             break
     method = "enumerate" if r.evidence.startswith("enumeration") else "active-set"
-    cov = r.eicp.coverage if r.eicp is not None else {}
+    cov = r.eicp[0].coverage if r.eicp and r.eicp[0] is not None else {}
     sigma = r.modes[0].sigma if r.modes else float("nan")
     row = {"part": "convergence", "problem": "two-layer 4x4, slip+ base, mu=3", "quantity": "lambda",
            "method": method, "settings": (f"target={'0 (default)' if guesses[0] is None else 'extrapolated'};"
@@ -197,8 +171,6 @@ def control_rows(levels, mus, dense_max_r):
     rollers (x fixed), and with only the middle 1 ≤ x ≤ 3 of the base sliding (the nodes near
     the free corners sticking).  analyze() enumerates (a proof) where it chooses to; above
     that the dense full-support check of the same pencil."""
-    import meicp
-
     rows = []
     for variant in ("rollers", "middle-slip"):
         for mu in mus:
@@ -235,12 +207,10 @@ def control_rows(levels, mus, dense_max_r):
 
 # ---------------------------------------------------------------------------- part A: μ_c
 def mu_c_full_support(Ac, Bc):
-    """The smallest μ > 0 of the condensed pencil (``meicp.contact.instability.friction_pencils``)
+    """The smallest μ > 0 of the condensed pencil (``meicp.contact.critical_friction.friction_pencils``)
     with an eigenvector x > 0 (y = 0: a certified EiCP solution on the full support; its
     minimality is not proved).  Solved in ν = 1/μ, whose second matrix −Ac is positive
     definite (Bc is nearly singular)."""
-    import scipy.linalg as sl
-
     nu, V = sl.eig(-Bc, -Ac)
     for k in np.argsort(-nu.real):
         if not np.isfinite(nu[k]) or abs(nu[k].imag) > 1e-10 * abs(nu[k]) or nu[k].real <= 0:
@@ -266,9 +236,6 @@ CF_VARIANTS = {
 def mu_c_rows(cf_levels, enum_levels, full_levels):
     """μ_c per level: critical_friction (condensed, no check) at enum_levels; with its check
     and by its former uncondensed path at cf_levels; the full-support value at full_levels."""
-    import meicp
-    from meicp.contact.instability import friction_pencils
-
     rows = []
     base = {"part": "convergence", "problem": "two-layer 4x4, slip+ base, mu=3", "quantity": "mu_c", "ranks": 1,
             "repeat": 0}
@@ -382,55 +349,28 @@ def feature_scene(name, n):
     return make_scene(n, states=states, interface=interface)
 
 
-def _status_kb(key):
-    with open("/proc/self/status") as f:
-        return next(int(line.split()[1]) for line in f if line.startswith(key + ":"))
-
-
-def _reset_peak_rss():
-    """Reset the kernel's peak resident set (VmHWM) to the current one (Linux ≥ 4.0:
-    ``5 > /proc/self/clear_refs``); returns the current resident set in bytes."""
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-    except OSError:
-        pass
-    return _status_kb("VmRSS") * 1024
-
-
-def _peak_rss():
-    """Peak resident set since the last reset, bytes (VmHWM; ru_maxrss as a fallback)."""
-    try:
-        return _status_kb("VmHWM") * 1024
-    except (OSError, StopIteration):
-        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-
 def run_feature(name, n):
     """One timed run in this (fresh) process; prints a JSON line."""
-    import meicp
-
     meicp.analyze(make_scene(4), method="active-set")   # warm-up: imports, PETSc initialisation
     meicp.analyze(make_scene(4), method="enumerate")
     scene = feature_scene(name, n)
     method = "enumerate" if name == "enumeration" else "active-set"
-    rss0 = _reset_peak_rss()
-    t0 = time.perf_counter()
+    with Stage() as st:
+        if name.startswith("critical-friction"):
+            v = meicp.critical_friction(scene, **{"critical-friction": {},
+                                                  "critical-friction-nocheck": {"bisection": False},
+                                                  "critical-friction-uncondensed": {"condense": False,
+                                                                                    "bisection": False}}[name])
+        else:
+            kw = {"target": SHIFT[n], "nev": 8} if method == "active-set" and SHIFT.get(n) else {}
+            r = meicp.analyze(scene, method=method, **kw)
     if name.startswith("critical-friction"):
-        v = meicp.critical_friction(scene, **{"critical-friction": {}, "critical-friction-nocheck": {"bisection": False},
-                                              "critical-friction-uncondensed": {"condense": False, "bisection": False}
-                                              }[name])
-        wall = time.perf_counter() - t0
         out = {"status": "solved", "value": v, "method": "critical_friction", "sizes": {}, "evidence": name}
     else:
-        kw = {"target": SHIFT[n], "nev": 8} if method == "active-set" and SHIFT.get(n) else {}
-        r = meicp.analyze(scene, method=method, **kw)
-        wall = time.perf_counter() - t0
         out = {"status": r.status, "value": r.modes[0].sigma if r.modes else None, "method": method,
                "sizes": r.sizes, "stable": r.stable, "evidence": r.evidence[:160],
                "cases": r.evidence.count("|") + 1, "timings": r.timings}
-    peak = _peak_rss()
-    out.update(wall=wall, peak_mb=max(0, peak - rss0) / 2**20, n=n, dofs=scene.n_dofs)
+    out.update(wall=st.wall, peak_mb=st.delta / 2**20, n=n, dofs=scene.n_dofs)
     print("RESULT " + json.dumps(out, default=str), flush=True)
 
 
@@ -490,7 +430,7 @@ def main(argv=None) -> int:
         repeats = args.repeats or 5
         plan = [(8, k) for k in FEATURES] + [(BIG_N, k) for k in FEATURES
                                              if k != "enumeration" and not k.startswith("critical-friction")]
-    path = bench_csv.csv_path("resolution")
+    path = csv_path("resolution")
     rows = []
     if "convergence" in args.parts:
         print("part A: resolution convergence", flush=True)
@@ -522,7 +462,7 @@ def main(argv=None) -> int:
         print(f"part B: cost of scene features ({repeats} repeats, fresh process each)", flush=True)
         rows += feature_rows(plan, repeats)
     parts = set(args.parts)
-    bench_csv.write_rows(path, rows, FIELDS, keep=lambda r: r.get("part") not in parts)
+    write_rows(path, rows, FIELDS, keep=lambda r: r.get("part") not in parts)
     print(f"wrote {path}")
     return 0
 

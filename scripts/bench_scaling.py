@@ -80,19 +80,25 @@ import argparse
 import gc
 import json
 import math
-import os
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
+import scipy.sparse.linalg as spla
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
+import bench_eicp
+import meicp
+from bench_common import (MUMPS_ORDER_NAME, Stage, csv_path, release_memory, rss_bytes, slepc_eigensolve,
+                          write_rows)
+from bench_scenes import lattice_shape, two_layer_scene
+from meicp.contact import pencil
+from meicp.contact.maps import contact_sets
+from meicp.contact.problem import pencil_of
+from meicp.contact.static import static_equilibrium
+from meicp.lattice.model import LatticeModel
+from meicp.lcp.siconos import siconos_solve
+from meicp.petsc import import_slepc
+from meicp.petsc.mat import destroying, mat_from_scipy
 
 FIELDS = ["problem", "stage", "method", "settings", "ranks", "dofs", "nx", "ny", "J", "n", "repeats",
           "wall_s", "wall_min_s", "wall_max_s", "iterations", "eigen_solves", "status", "error",
@@ -104,168 +110,38 @@ ORDER_FIELDS = ["problem", "stage", "method", "settings", "ordering", "ordering_
 # MUMPS ICNTL(7) sequential orderings (Debian's MUMPS 5.5 has PORD, AMD, AMF, QAMD; METIS and
 # SCOTCH requests fall back to PORD) and ICNTL(28) = 2 parallel ordering (none available)
 ORDERINGS = {"auto": None, "amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6}
-MUMPS_ORDER_NAME = {0: "AMD", 2: "AMF", 3: "SCOTCH", 4: "PORD", 5: "METIS", 6: "QAMD", 7: "auto"}
 FULL_DOFS = (10_000, 30_000, 100_000, 300_000, 1_000_000)
 QUICK_DOFS = (10_000, 30_000)
 MU = 2.0
 
 
-# ----------------------------------------------------------------------------- memory
-
-def _status_kb(key: str) -> float:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(key):
-                return float(line.split()[1])
-    return float("nan")
-
-
-def release_memory() -> None:
-    gc.collect()
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
-
-
-class Stage:
-    """Wall time (barrier to barrier, max over ranks) and peak RSS (VmHWM after a reset)."""
-
-    def __init__(self, comm):
-        self.comm = comm
-
-    def __enter__(self):
-        release_memory()
-        try:
-            with open("/proc/self/clear_refs", "w") as f:
-                f.write("5")  # resets VmHWM to the current RSS (Linux ≥ 4.0)
-        except OSError:
-            pass
-        self.comm.Barrier()
-        self.load1 = os.getloadavg()[0]
-        self.c0 = time.process_time()
-        self.t0 = time.perf_counter()
-        return self
-
-    def __exit__(self, *exc):
-        from mpi4py import MPI
-
-        if exc[0] is None:
-            self.comm.Barrier()
-        mine = time.perf_counter() - self.t0
-        cpu = (time.process_time() - self.c0) / max(mine, 1e-9)
-        peak = _status_kb("VmHWM") / 1024.0
-        if exc[0] is None:
-            self.wall = self.comm.allreduce(mine, op=MPI.MAX)
-            self.cpu_frac = self.comm.allreduce(cpu, op=MPI.MIN)
-            self.peak = self.comm.allreduce(peak, op=MPI.MAX)
-            self.total = self.comm.allreduce(peak, op=MPI.SUM)
-        return False
-
-
 # ----------------------------------------------------------------------------- problem
 
-def lattice_shape(dofs: int) -> tuple[int, int]:
-    if dofs == 1_000_000:
-        return 1000, 500
-    ny = max(2, 2 * round(math.sqrt(dofs / 4) / 2))
-    return 2 * ny, ny
-
-
 def make_scene(nx: int, ny: int, *, states="slip+", load=None):
-    from meicp.io.scene import scene_from_dict
-
-    d = {"lattice": {"nx": nx, "spacing": 1.0},
-         "layers": [{"name": "A", "rows": max(1, ny // 2), "stiffness": 1.0, "density": 1.0},
-                    {"name": "B", "rows": ny - max(1, ny // 2), "stiffness": 5.0, "density": 2.0}],
-         "boundary": {"top": "fixed", "bottom": "contact"},
-         "contact": {"friction": MU, "states": states},
-         "solver": {"method": "active-set", "nev": 4}}
-    if load is not None:
-        d["load"] = {"top_displacement": load}
-    return scene_from_dict(d)
+    lower = max(1, ny // 2)
+    return two_layer_scene(nx, (lower, ny - lower), mu=MU, states=states, load=load,
+                           solver={"method": "active-set", "nev": 4})
 
 
-def build_pencil(model, scene, K, M, comm):
-    """(A, B, J) as analyze builds them: SciPy on 1 rank, PETSc products on several."""
-    from meicp.contact.instability import _distributed_pencil
-    from meicp.contact.maps import contact_sets, grazing_cases, reduced_system
-
-    sets = contact_sets(scene, model)
-    red = reduced_system(model, sets, next(iter(grazing_cases(sets))))
-    if comm.size > 1:
-        A, B = _distributed_pencil(K, M, red, comm)
-    else:
-        A, B = -(red.P @ K @ red.Q).tocsr(), (red.P @ M @ red.Q).tocsr()
-    return A, B, red.J
+def build_pencil(model, scene, K, M):
+    """The pencil as analyze builds it from K, M (SciPy on 1 rank, PETSc products on several)."""
+    return pencil_of(K, M, model, contact_sets(scene, model))
 
 
 def main_pencil(dofs: int, comm):
     """(nx, ny, A, B) of the all-slip family at about ``dofs`` DOFs, as PETSc Mats on comm."""
-    import meicp
-    from meicp.lattice.model import LatticeModel
-    from meicp.petsc.mat import mat_from_scipy
-
     nx, ny = lattice_shape(dofs)
-    scene = make_scene(nx, ny)
-    model = LatticeModel(scene)
-    K, M = meicp.assemble(model, comm if comm.size > 1 else None)
-    A, B, _ = build_pencil(model, scene, K, M, comm)
-    for x in (K, M):
-        if hasattr(x, "destroy"):
-            x.destroy()
-    if not hasattr(A, "getSize"):
+    pen = pencil(make_scene(nx, ny), comm=comm)
+    A, B = pen.A, pen.B
+    if not pen.distributed:
         A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
     return nx, ny, A, B
 
 
 def slepc_eigs(A, B, nev, comm, extra=None, info=None, hermitian=False):
-    """One shift-and-invert Krylov–Schur solve (MUMPS), nev nearest 0 in modulus (GNHEP) or in
-    real part (``hermitian``: GHEP, the options of the active-set's own solves).  ``extra``:
-    more options under the solve's prefix (e.g. ``st_mat_mumps_icntl_7``).  ``info`` (a dict)
-    receives ``setup_s`` (EPSSetUp: MUMPS analysis and factorisation, this rank's wall time),
-    and the factor's MUMPS ``ordering_used`` (INFOG(7)), ``factor_entries`` (INFOG(29)) and
-    ``flops`` (RINFOG(3), elimination)."""
-    from meicp.petsc import import_slepc
-    from meicp.petsc.options import OptionsScope
-
-    SLEPc = import_slepc()
-    opts = {"eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True, "eps_tol": 1e-10,
-            "eps_gen_non_hermitian": True, "st_type": "sinvert", "st_ksp_type": "preonly",
-            "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps"}
-    if hermitian:
-        del opts["eps_target_magnitude"], opts["eps_gen_non_hermitian"]
-        opts.update(eps_target_real=True, eps_gen_hermitian=True, eps_tol=1e-12)
-    opts.update(extra or {})
-    eps = SLEPc.EPS().create(comm=A.getComm())
-    try:
-        eps.setOperators(A, B)
-        with OptionsScope("bench_scaling_", opts):
-            eps.setOptionsPrefix("bench_scaling_")
-            eps.setFromOptions()
-            t0 = time.perf_counter()
-            eps.setUp()
-            setup = time.perf_counter() - t0
-            eps.solve()
-        nconv = eps.getConverged()
-        vals = np.array([eps.getEigenvalue(i) for i in range(min(nconv, nev))], dtype=complex)
-        its = eps.getIterationNumber()
-        if info is not None:
-            info["setup_s"] = setup
-            try:
-                F = eps.getST().getKSP().getPC().getFactorMatrix()
-                info["ordering_used"] = MUMPS_ORDER_NAME.get(F.getMumpsInfog(7), str(F.getMumpsInfog(7)))
-                entries = F.getMumpsInfog(29)  # negative: millions of entries
-                info["factor_entries"] = entries if entries >= 0 else -entries * 1_000_000
-                info["flops"] = F.getMumpsRinfog(3)
-                F.destroy()  # drops this reference (without it the factor outlives the EPS)
-            except Exception as e:  # noqa: BLE001 (diagnostics only)
-                info["ordering_used"] = f"? ({type(e).__name__})"
-    finally:
-        eps.destroy()
-    return vals, its
+    """One reference eigen-solve (:func:`bench_common.slepc_eigensolve`) under this
+    benchmark's prefix."""
+    return slepc_eigensolve(A, B, nev, hermitian=hermitian, extra=extra, info=info, prefix="bench_scaling_")
 
 
 def match_error(ref: np.ndarray, vals: np.ndarray) -> float:
@@ -286,12 +162,9 @@ class Runner:
         self.args, self.comm = args, comm
         self.rows: list = []
         self.arpack_last = None  # (n, seconds) of the last ARPACK run, for the prediction
-        import meicp.petsc  # noqa: F401  (the libraries in RSS before the baseline)
-        from meicp.petsc import import_slepc
-
-        import_slepc()
+        import_slepc()  # the libraries in RSS before the baseline
         release_memory()
-        self.base_mb = comm.allreduce(_status_kb("VmRSS") / 1024.0, op=__import__("mpi4py.MPI").MPI.MAX)
+        self.base_mb = max(comm.allgather(rss_bytes() / 2**20))
 
     def say(self, msg):
         if self.comm.rank == 0:
@@ -318,8 +191,9 @@ class Runner:
         self.say(f"  {base['stage']:<10} {base['method']:<26} {base['status']:<22} {w:>9} s  "
                  f"peak {base['peak_rss_mb']:>6} MB/rank  {base['detail'][:90]}")
 
-    def timed(self, n_rep, fn):
-        """Run fn() n_rep times inside Stage; return (last value, walls, peak, total)."""
+    def stages(self, n_rep, fn):
+        """Run fn() n_rep times, each a :class:`bench_common.Stage` (wall time, peak memory,
+        CPU share, load); return (last value, walls, peak, total)."""
         walls, peaks, totals, out = [], [], [], None
         self.cpu, self.load = [], []
         for rep in range(n_rep):
@@ -338,10 +212,6 @@ class Runner:
 
     # -- the main lattice family --------------------------------------------------------
     def lattice(self, dofs):
-        import meicp
-        from meicp.eicp.solve import solve_eicp
-        from meicp.lattice.model import LatticeModel
-
         comm, args = self.comm, self.args
         nx, ny = lattice_shape(dofs)
         scene = make_scene(nx, ny)
@@ -358,21 +228,20 @@ class Runner:
                         cpu_frac=min(self.cpu), load1=max(self.load))
 
         # assemble
-        (K, M), walls, peak, total = self.timed(reps, lambda: meicp.assemble(model, comm if comm.size > 1 else None))
+        (K, M), walls, peak, total = self.stages(reps, lambda: meicp.assemble(model, comm if comm.size > 1 else None))
         self.row(**common, stage="assemble", method=f"meicp-{mode}", settings="K and M", status="ok",
                  peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
         # pencil
-        (A, B, J), walls, peak, total = self.timed(reps, lambda: build_pencil(model, scene, K, M, comm))
-        n = A.getSize()[0] if hasattr(A, "getSize") else A.shape[0]
+        pen, walls, peak, total = self.stages(reps, lambda: build_pencil(model, scene, K, M))
+        A, B, J = pen.A, pen.B, pen.J
+        n = pen.maps.retained.size
         common["n"] = n
         self.row(**common, stage="pencil", method=f"meicp-{mode}", settings="contact maps, A=-PKQ, B=PMQ",
                  status="ok", peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
         # eigensolve: SLEPc + MUMPS on PETSc matrices (conversion from SciPy untimed on 1 rank)
-        if hasattr(A, "getSize"):
+        if pen.distributed:
             Ap, Bp = A, B
         else:
-            from meicp.petsc.mat import mat_from_scipy
-
             Ap, Bp = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
         infos = []
 
@@ -380,7 +249,7 @@ class Runner:
             infos.append({})
             return slepc_eigs(Ap, Bp, args.nev, comm, info=infos[-1])
 
-        (vals, its), walls, peak, total = self.timed(reps, eig)
+        (vals, its), walls, peak, total = self.stages(reps, eig)
         slepc_vals, slepc_wall = vals, statistics.median(walls)
         self.row(**common, stage="eigensolve", method="slepc-krylovschur+mumps", iterations=its,
                  eigen_solves=1, settings=f"sinvert target=0 (magnitude) nev={args.nev} tol=1e-10",
@@ -394,7 +263,7 @@ class Runner:
             Ap.destroy()
             Bp.destroy()
         # the MEiCP by the active-set search
-        r, walls, peak, total = self.timed(reps, lambda: solve_eicp(
+        r, walls, peak, total = self.stages(reps, lambda: meicp.solve_eicp(
             A, B, J=J, method="active-set", lam_min=0.0, target=0.0, nev=args.nev, tol=1e-10))
         sol = r.solutions[0] if r.solutions else None
         cov = r.coverage
@@ -411,18 +280,15 @@ class Runner:
         # peer: ARPACK + SuperLU on the same pencil
         if comm.size == 1:
             self.arpack(common, A, B, slepc_vals, slepc_wall)
-        if hasattr(A, "destroy"):
-            A.destroy()
-            B.destroy()
-        if hasattr(K, "destroy"):
-            K.destroy()
-            M.destroy()
-        del A, B, K, M
+        pen.destroy()
+        with destroying(K, M):
+            pass
+        del A, B, K, M, pen
         release_memory()
         # analyze end to end
-        res, walls, peak, total = self.timed(reps, lambda: meicp.analyze(scene, comm if comm.size > 1 else None,
+        res, walls, peak, total = self.stages(reps, lambda: meicp.analyze(scene, comm if comm.size > 1 else None,
                                                                          method="active-set"))
-        e = res.eicp if not isinstance(res.eicp, list) else res.eicp[0]
+        e = res.eicp[0]
         sigma = res.modes[0].sigma if res.modes else None
         agree = ""
         if sigma is not None and as_lam is not None:
@@ -440,8 +306,6 @@ class Runner:
             self.lcp(nx, ny)
 
     def arpack(self, common, A, B, slepc_vals, slepc_wall):
-        import scipy.sparse.linalg as spla
-
         n, args = common["n"], self.args
         settings = f"scipy eigs sigma=0 which=LM k={args.nev} tol=1e-10 (SuperLU)"
         if self.arpack_last is not None:
@@ -475,10 +339,6 @@ class Runner:
                  cpu_frac=min(cpu), load1=max(load))
 
     def lcp(self, nx, ny):
-        import meicp
-        from meicp.contact.static import static_equilibrium
-        from meicp.lcp.siconos import siconos_solve
-
         args = self.args
         dofs = 2 * nx * ny
         common = dict(problem=f"lattice_{nx}x{ny}", dofs=dofs, nx=nx, ny=ny, J=nx, repeats=1)
@@ -515,22 +375,19 @@ class Runner:
 
     # -- tiny lattices: enumeration next to the active-set -------------------------------
     def tiny(self, nx):
-        from meicp.eicp.solve import solve_eicp
-        from meicp.lattice.assembly import assemble
-        from meicp.lattice.model import LatticeModel
-
         comm = self.comm
         ny = nx // 2
         scene = make_scene(nx, ny)
         model = LatticeModel(scene)
-        K, M = assemble(model)
-        A, B, J = build_pencil(model, scene, K, M, _Serial())
+        K, M = meicp.assemble(model)
+        pen = build_pencil(model, scene, K, M)
+        A, B, J = pen.A, pen.B, pen.J
         Ad, Bd = A.toarray(), B.toarray()
         common = dict(problem=f"lattice_{nx}x{ny}", dofs=model.n_dofs, nx=nx, ny=ny, J=J.size, n=A.shape[0],
                       repeats=1)
         self.say(f"\nlattice_{nx}x{ny} (tiny): {model.n_dofs} DOFs, |J| = {J.size}, {comm.size} rank(s)")
         with Stage(comm) as st:
-            r = solve_eicp(Ad, Bd, J=J, method="enumerate", lam_min=0.0, tol=1e-10,
+            r = meicp.solve_eicp(Ad, Bd, J=J, method="enumerate", lam_min=0.0, tol=1e-10,
                            comm=comm if comm.size > 1 else None)
         lams = np.array([s.lam for s in r.solutions])
         self.row(**common, stage="meicp", method="enumerate", settings=f"all 2^{J.size} supports, lam_min=0",
@@ -541,7 +398,7 @@ class Runner:
                  load1=st.load1, peak_rss_mb=st.peak, total_rss_mb=st.total)
         if comm.size == 1:
             with Stage(comm) as st:
-                ra = solve_eicp(A, B, J=J, method="active-set", lam_min=0.0, target=0.0, nev=self.args.nev,
+                ra = meicp.solve_eicp(A, B, J=J, method="active-set", lam_min=0.0, target=0.0, nev=self.args.nev,
                                 tol=1e-10)
             sol = ra.solutions[0] if ra.solutions else None
             err = float(np.min(np.abs(lams - sol.lam)) / abs(sol.lam)) if sol is not None and lams.size else ""
@@ -559,9 +416,6 @@ class Runner:
         B = M_ff, bottom and top rows fixed, J = both DOFs of the lowest free row): the
         active-set leaves and re-enters supports, so its iterations are measured against one
         eigen-solve of the same pencil (GHEP, the active-set's own SLEPc options)."""
-        import bench_eicp
-        from meicp.eicp.solve import solve_eicp
-
         comm, args = self.comm, self.args
         nx = 2 * round(math.sqrt(dofs) / 2)
         A, B, J = bench_eicp.lattice_pencil(nx, comm, "xy")
@@ -582,15 +436,15 @@ class Runner:
             infos.append({})
             return slepc_eigs(A, B, args.nev, comm, info=infos[-1], hermitian=True)
 
-        (vals, its), walls, peak, total = self.timed(reps, eig)
+        (vals, its), walls, peak, total = self.stages(reps, eig)
         t_single = statistics.median(walls)
         self.row(**common, stage="xy-eigensolve", method="slepc-krylovschur+mumps", iterations=its, eigen_solves=1,
                  settings=f"GHEP sinvert target=0 (real) nev={args.nev} tol=1e-12", lam=fmt_vals(vals),
                  status="solved" if vals.size >= args.nev else "not_converged",
                  setup_s=f"{statistics.median(i['setup_s'] for i in infos):.4g}",
                  peak_rss_mb=peak, total_rss_mb=total, **stat(walls))
-        r, walls, peak, total = self.timed(reps, lambda: solve_eicp(A, B, J=J, method="active-set", target=0.0,
-                                                                    nev=args.nev, tol=1e-10))
+        r, walls, peak, total = self.stages(reps, lambda: meicp.solve_eicp(A, B, J=J, method="active-set",
+                                                                           target=0.0, nev=args.nev, tol=1e-10))
         sol = r.solutions[0] if r.solutions else None
         cov = r.coverage
         hist = cov.get("history", [])
@@ -628,7 +482,7 @@ class Runner:
                     vals, its = slepc_eigs(A, B, args.nev, comm, extra=extra, info=info[name])
                 d = res[name]
                 d["walls"].append(st.wall)
-                d["setups"].append(comm.allreduce(info[name]["setup_s"], op=__import__("mpi4py.MPI").MPI.MAX))
+                d["setups"].append(max(comm.allgather(info[name]["setup_s"])))
                 d["cpu"].append(st.cpu_frac)
                 d["load"].append(st.load1)
                 d["peak"] = max(d["peak"], st.peak)
@@ -696,10 +550,6 @@ class Runner:
         return rows
 
 
-class _Serial:
-    size, rank = 1, 0
-
-
 def _cleanup(out):
     items = out if isinstance(out, tuple) else (out,)
     for x in items:
@@ -742,9 +592,9 @@ def main():
     for d in xy:
         run.xy(d)
     if comm.rank == 0:
-        out = bench_csv.csv_path("scaling")
+        out = csv_path("scaling")
         mine = str(comm.size)
-        bench_csv.write_rows(out, run.rows, FIELDS, keep=lambda r: r["ranks"] != mine)
+        write_rows(out, run.rows, FIELDS, keep=lambda r: r["ranks"] != mine)
         print(f"\nwrote {len(run.rows)} rows ({comm.size} rank(s)) to {out} in {time.perf_counter() - t0:.0f} s")
 
 
@@ -761,9 +611,9 @@ def main_orderings(args):
         reps = args.ordering_repeats[min(k, len(args.ordering_repeats) - 1)]
         rows += run.orderings(d, names, reps)
     if comm.rank == 0:
-        out = bench_csv.csv_path("scaling_ordering")
+        out = csv_path("scaling_ordering")
         mine = str(comm.size)
-        bench_csv.write_rows(out, rows, ORDER_FIELDS, keep=lambda r: r["ranks"] != mine)
+        write_rows(out, rows, ORDER_FIELDS, keep=lambda r: r["ranks"] != mine)
         print(f"\nwrote {len(rows)} rows ({comm.size} rank(s)) to {out} in {time.perf_counter() - t0:.0f} s")
 
 

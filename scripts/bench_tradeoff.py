@@ -45,23 +45,22 @@ from __future__ import annotations
 
 import argparse
 import logging
-import statistics
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import bench_csv  # noqa: E402
-from bench_lcp import condensed, lattice  # noqa: E402
+import meicp
+from bench_common import csv_path, timed, write_rows
+from bench_lcp import condensed, lattice
+from bench_scenes import two_layer_scene
+from meicp.contact import pencil
+from meicp.lcp.problem import LCPProblem, relative_residual
+from meicp.lcp.siconos import siconos_solve
+from meicp.lcp.solve import solve_lcp
 
 FIELDS = ["kind", "family", "problem", "n", "J", "method", "tol", "settings", "ranks", "wall_s",
           "repeats", "iterations", "status", "residual", "error", "solutions", "wrong", "lam", "note"]
@@ -79,34 +78,17 @@ def fmt(v, spec=".3g"):
     return "" if v is None or (isinstance(v, float) and not np.isfinite(v)) else format(v, spec)
 
 
-def timed(fn, budget: float, max_repeat: int = 5):
-    """Median wall time of up to ``max_repeat`` runs, repeating while the total stays under
-    ``budget`` seconds; returns (median, repeats, last result)."""
-    times, result = [], None
-    while True:
-        t0 = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - t0)
-        if len(times) >= max_repeat or sum(times) + times[-1] > budget:
-            break
-    return statistics.median(times), len(times), result
-
-
 # ------------------------------------------------------------------------------------------
 # LCP
 # ------------------------------------------------------------------------------------------
 
 
 def lcp_certificate(M, q, x):
-    from meicp.lcp.problem import LCPProblem, relative_residual
-
     return relative_residual(LCPProblem.from_data(M, q), x)[0]
 
 
 def lcp_reference(M, q):
     """(x_ref, residual, note): the support of the best tight solve, re-solved by SciPy."""
-    from meicp.lcp.solve import solve_lcp
-
     cands = []
     r = solve_lcp(M, q, method="newton", tol=1e-12, options={"snes_rtol": 1e-15})
     if r.x is not None:
@@ -135,9 +117,6 @@ def lcp_reference(M, q):
 
 def lcp_call(M, q, method, tol, args):
     """(callable, settings string) for one LCP method at one tolerance."""
-    from meicp.lcp.siconos import siconos_solve
-    from meicp.lcp.solve import solve_lcp
-
     if method.startswith("siconos-"):
         solver = method[len("siconos-"):]
         if solver in ("lemke", "enum"):
@@ -195,7 +174,7 @@ def run_lcp(args):
                     rows.append(dict(base, status="skipped", note=f"not run: failed at looser tol {failed_at:g}"))
                     continue
                 try:
-                    wall, reps, r = timed(fn, args.budget)
+                    wall, reps, r = timed(fn, budget=args.budget)
                 except Exception as exc:  # noqa: BLE001 - a benchmark records failures
                     rows.append(dict(base, status="error", note=f"{type(exc).__name__}: {exc}"[:200]))
                     print(f"  {method:18s} tol={tol:<7g} error {type(exc).__name__}: {exc}", flush=True)
@@ -232,36 +211,8 @@ def random_sym(n: int, nJ: int, seed: int):
 
 def friction_pencil(nx: int, mu: float = 2.0, rows: int = 3):
     """The slip+ MEiCP of a sheared two-layer lattice on a rough base, as ``analyze`` builds it."""
-    from meicp.contact.maps import contact_sets, reduced_system
-    from meicp.io.scene import loads_scene
-    from meicp.lattice.assembly import assemble
-    from meicp.lattice.model import LatticeModel
-
-    scene = loads_scene(f"""
-[lattice]
-nx = {nx}
-shear = 0.3
-[[layers]]
-name = "soft"
-rows = {rows}
-stiffness = 1.0
-density = 1.0
-[[layers]]
-name = "stiff"
-rows = {rows}
-stiffness = 5.0
-density = 2.0
-[boundary]
-top = "fixed"
-bottom = "contact"
-[contact]
-friction = {mu}
-states = "slip+"
-""", source=f"bench_tradeoff friction nx={nx}")
-    model = LatticeModel(scene)
-    red = reduced_system(model, contact_sets(scene, model))
-    K, M = assemble(model)
-    return -(red.P @ K @ red.Q).toarray(), (red.P @ M @ red.Q).toarray(), red.J
+    pen = pencil(two_layer_scene(nx, (rows, rows), mu=mu, shear=0.3))
+    return pen.A.toarray(), pen.B.toarray(), pen.J
 
 
 def eicp_problems(args):
@@ -319,8 +270,6 @@ class EiCPReference:
 
 
 def eicp_call(A, B, J, method, tol, target):
-    import meicp
-
     if method == "enumerate":
         return (lambda: meicp.solve_eicp(A, B, J=J, method="enumerate", tol=tol)), f"certificate tol={tol:g}"
     if method == "active-set":
@@ -338,8 +287,6 @@ def eicp_call(A, B, J, method, tol, target):
 
 
 def run_eicp(args):
-    import meicp
-
     rows = []
     for family, name, A, B, J, target in eicp_problems(args):
         n = A.shape[0]
@@ -359,7 +306,7 @@ def run_eicp(args):
                     if method == "enumerate" and t_enum > args.budget / 2:
                         wall, reps, r = t_enum, 1, enum  # the reference run is the measurement
                     else:
-                        wall, reps, r = timed(fn, args.budget)
+                        wall, reps, r = timed(fn, budget=args.budget)
                 except Exception as exc:  # noqa: BLE001
                     rows.append(dict(base, status="error", note=f"{type(exc).__name__}: {exc}"[:200]))
                     print(f"  {method:12s} tol={tol:<7g} error {type(exc).__name__}: {exc}", flush=True)
@@ -391,16 +338,11 @@ def run_eicp(args):
 
 def warm_up():
     """First PETSc/SLEPc calls pay for imports and initialisation: do them untimed."""
-    import meicp
-    from meicp.lcp.solve import solve_lcp
-
     M = np.array([[2.0, -1.0], [-1.0, 2.0]])
     q = np.array([-1.0, 1.0])
     for m in ("newton", "tao", "pgs", "lemke"):
         solve_lcp(M, q, method=m)
     try:
-        from meicp.lcp.siconos import siconos_solve
-
         siconos_solve(M, q, "lemke")
     except ImportError:
         pass
@@ -450,8 +392,8 @@ def main():
         rows += run_lcp(args)
     if "eicp" in args.parts:
         rows += run_eicp(args)
-    out = bench_csv.csv_path("tradeoff")
-    bench_csv.write_rows(out, rows, FIELDS, keep=lambda r: r["kind"] not in args.parts)
+    out = csv_path("tradeoff")
+    write_rows(out, rows, FIELDS, keep=lambda r: r["kind"] not in args.parts)
     print(f"\nwrote {len(rows)} rows to {out} in {time.perf_counter() - t0:.0f} s")
 
 
