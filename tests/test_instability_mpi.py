@@ -38,3 +38,18 @@ def test_symmetric_pencil_stability_is_proved_by_inertia_on_two_ranks(comm):
     for c in (comm, None):
         r = analyze(loads_scene(text), comm=c, method="active-set")
         assert r.stable is True and "inertia" in r.evidence, r.evidence
+
+
+def test_public_pencil_is_the_same_on_two_ranks(comm):
+    """meicp.contact.pencil: PETSc Mats on the lattice's row bands, equal to the SciPy pencil."""
+    import meicp
+    from meicp.contact import pencil
+    from meicp.petsc.mat import mat_to_scipy
+
+    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+    serial = pencil(scene)
+    with pencil(scene, comm=comm) as par:
+        assert par.distributed and not serial.distributed
+        assert (par.J == serial.J).all()
+        for a, b in ((par.A, serial.A), (par.B, serial.B)):
+            assert abs(mat_to_scipy(a) - b).max() <= 1e-14 * abs(b).max()
