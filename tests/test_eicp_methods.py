@@ -1,7 +1,7 @@
 """Two independent EiCP methods: SPG on the Rayleigh quotient (meicp.eicp.rayleigh) and
 semismooth Newton on PETSc SNES VI (meicp.eicp.semismooth).
 
-Oracles (DESIGN §3), computed here without the library:
+Oracles (docs/design.md §4.4), computed here without the library:
 - ``brute_force``: every nonempty support S ⊆ J, the reduced pencil on R = F ∪ S by
   ``scipy.linalg.eigh``, eigenpairs with ξ_S > 0 and (λB − A)_{J∖S} ξ ≥ 0 (both signs of ξ
   when S = ∅, since then nothing fixes the sign);
