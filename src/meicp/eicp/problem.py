@@ -122,12 +122,14 @@ class EiCPResult(Result):
     ``cycling``, ``not_converged``...), with what was reached in ``candidates``.
     method: the method that produced the result; coverage: what was searched (supports
     visited, eigen-solves), the evidence behind a ``no_solution``.
+    attempts: for ``auto``, the (method, status, message) of every method run, in order.
     """
 
     solutions: list = field(default_factory=list)
     method: str = ""
     candidates: list = field(default_factory=list)
     coverage: dict = field(default_factory=dict)
+    attempts: list = field(default_factory=list)
 
     @property
     def lam(self) -> float | None:
