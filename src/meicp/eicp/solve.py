@@ -15,7 +15,7 @@ import time
 from ..core.errors import ProblemError, SolverNotFound
 from .active_set import active_set
 from .enumeration import enumerate_eicp
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 
 #: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
 AUTO_ENUMERATE_J = 16
@@ -59,6 +59,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     go to the method (``target``, ``nev``, ``max_iter``, ``options``...).  Every returned
     solution passed its certificate; see :class:`EiCPResult` for the statuses.
     """
+    check_options(tol=tol, lam_min=lam_min, **kwargs)
     if not 0.0 < tol < 1.0:
         raise ProblemError(f"tol must lie in (0, 1), got {tol!r}")
     if tol > LOOSE_TOL:
