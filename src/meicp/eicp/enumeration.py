@@ -392,7 +392,8 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     doubts = []
     if unverified:
         doubts.append(f"{unverified} sign-feasible candidate(s) whose eigenpair could not be resolved "
-                      f"(row-wise residual up to {worst:.1e} after Newton polishing) may hide solutions")
+                      f"(row-wise residual up to {worst:.1e} after Newton polishing: the pencil is too badly "
+                      f"conditioned on their supports) may hide solutions")
     if out_of_range:
         doubts.append(f"{out_of_range} candidate(s) have λ beyond double precision (λ = 2^{e.view.scaling.lam_exponent}"
                       f"·λ̃ of the scaled pencil overflows or underflows)")
@@ -404,7 +405,7 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     elif doubts:
         result.status = "undecided"
         result.message = (f"no certified solution{window}, but this is not a proof that there is none: "
-                          + "; ".join(doubts) + " (the pencil is too badly conditioned on some supports)")
+                          + "; ".join(doubts))
     else:
         result.status = "no_solution"
         result.message = (f"no solution{window}: all {2 ** J.size} supports visited, none gives a "

@@ -224,7 +224,7 @@ def certify_pair(problem: EiCPProblem, lam: float, x: np.ndarray,
 
 def check_options(*, tol, lam_min=None, **kwargs) -> None:
     """The numeric arguments of :func:`~meicp.eicp.solve.solve_eicp` and its methods:
-    ProblemError naming the one that is wrong (tol outside (0, 1), a NaN or infinite λ bound
+    ProblemError naming the one that is wrong (tol outside (0, 1e-2], a NaN or infinite λ bound
     or target, a non-integer count).  ``lam_min = nan`` used to turn every answer into
     "no solution"."""
     check_tol(tol)
