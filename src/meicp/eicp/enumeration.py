@@ -136,7 +136,9 @@ class _Enumerator:
         self.scales = problem.scales()
         self.floor = lam_floor(self.lam_min, self.scales)
         self.rows: list = []
-        self.seen: set = set()
+        self.seen: dict = {}  # support mask → indices into rows
+        a, b = self.scales
+        self.same_lam = 1e-12 * (a / b if b > 0 else 1.0)  # absolute part of "the same λ"
         self.eigen_solves = 0
         self.slow_path = 0
         self.second_pass = 0
@@ -324,11 +326,7 @@ class _Enumerator:
                 for key in parts:
                     parts[key][r] = p1[key][0]
         for r in np.flatnonzero((res <= self.tol) & inside):
-            key = (in_support[r].tobytes(), float(f"{lams[r]:.9g}"))
-            if key in self.seen:
-                continue
-            self.seen.add(key)
-            self.rows.append((lams[r], X[r], W[r], in_support[r], res[r]))
+            self._keep((lams[r], X[r], W[r], in_support[r], res[r]))
         doubtful = self._doubtful(res, parts) & inside & countable & np.isfinite(lams)
         self.unverified += int(np.count_nonzero(doubtful))
         if doubtful.any():
@@ -336,6 +334,21 @@ class _Enumerator:
         # λ beyond double precision in the window: overflow (±inf), or underflow (NaN, ≈ 0)
         beyond = (np.isinf(lams) & inside) | (np.isnan(lams) & (self.floor <= 0.0 <= self.lam_max))
         self.out_of_range += int(np.count_nonzero(beyond & countable))
+
+    def _keep(self, row) -> None:
+        """One solution per (support, λ): a support gives one solution per eigenvalue, ±ξ on
+        an empty support are one solution, and the two passes may both find it (λ equal to
+        1e-8 relative: then the better certified one stays)."""
+        lam, res = row[0], row[4]
+        mates = self.seen.setdefault(row[3].tobytes(), [])
+        for k in mates:
+            other = self.rows[k]
+            if abs(other[0] - lam) <= 1e-8 * max(abs(other[0]), abs(lam)) + self.same_lam:
+                if res < other[4]:
+                    self.rows[k] = row
+                return
+        mates.append(len(self.rows))
+        self.rows.append(row)
 
     def _doubtful(self, res, parts):
         """Failing candidates whose eigenpair is not resolved and whose sign and dual

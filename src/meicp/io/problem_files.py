@@ -144,6 +144,13 @@ def read_siconos_lcp(path) -> tuple[object, np.ndarray, str]:
     return M, q, tok.rest()
 
 
+def _block_ends(tok: _Tokens, count: int, what: str, n: int) -> np.ndarray:
+    ends = tok.integers(count, f"the {what}", 1, n)
+    if np.any(np.diff(ends) <= 0) or ends[-1] != n:
+        raise ProblemError(f"{tok.path}: the {what} {ends[:8].tolist()} must increase strictly up to n = {n}")
+    return ends
+
+
 def _read_sparse_block(tok: _Tokens, n: int) -> sp.csr_matrix:
     """Siconos' SparseBlockStructuredMatrix text layout, as written by SBM_write_in_file;
     every count and index is checked against the header before it is used."""
@@ -153,11 +160,8 @@ def _read_sparse_block(tok: _Tokens, n: int) -> sp.csr_matrix:
         raise ProblemError(f"{path}: sparse-block header {size0}x{size1} does not describe an {n}x{n} matrix")
     nblocks = tok.integer("the number of blocks", 0, n * n)
     nb_rows, nb_cols = tok.integer("the block rows", 1, n), tok.integer("the block columns", 1, n)
-    row_ends = tok.integers(nb_rows, "the block row ends", 1, n)
-    col_ends = tok.integers(nb_cols, "the block column ends", 1, n)
-    for what, ends in (("block row ends", row_ends), ("block column ends", col_ends)):
-        if np.any(np.diff(ends) <= 0) or ends[-1] != n:
-            raise ProblemError(f"{path}: the {what} {ends[:8].tolist()} must increase strictly up to n = {n}")
+    row_ends = _block_ends(tok, nb_rows, "block row ends", n)
+    col_ends = _block_ends(tok, nb_cols, "block column ends", n)
     filled1 = tok.integer("the block row pointer length", nb_rows + 1, nb_rows + 1)
     filled2 = tok.integer("the number of stored blocks", nblocks, nblocks)
     block_row_ptr = tok.integers(filled1, "the block row pointer", 0, nblocks)

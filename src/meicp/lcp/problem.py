@@ -118,9 +118,9 @@ def relative_residual(problem: LCPProblem, x: np.ndarray) -> tuple[float, np.nda
     sw = np.maximum(np.abs(problem.q), problem.row_scales * sx)
     sw = np.where(sw > 0, sw, 1.0)  # a zero scale means w_i = 0 exactly
     sx = sx if sx > 0 else 1.0
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore"):  # (x/sx)·(w/sw): x·w itself overflows at x ≈ 1e200
         r = max(0.0, -float(np.min(x)) / sx, float(np.max(-w / sw)),
-                float(np.max(np.abs(x * w) / sw)) / sx)
+                float(np.max(np.abs(x / sx) * np.abs(w / sw))))
     return (r if np.isfinite(r) else float("inf")), w
 
 
@@ -136,7 +136,8 @@ def certify(problem: LCPProblem, result: LCPResult, x, tol: float = DEFAULT_TOL,
     r, w = relative_residual(problem, x)
     result.x, result.w, result.residual = x, w, r
     result.min_x, result.min_w = float(np.min(x)), float(np.min(w))
-    result.complementarity = abs(float(x @ w))
+    with np.errstate(over="ignore", invalid="ignore"):
+        result.complementarity = abs(float(x @ w))
     if r <= tol:
         result.status = SOLVED
         result.solutions = result.solutions or [x]
