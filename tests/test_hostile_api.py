@@ -101,6 +101,9 @@ API_ERRORS = [
     ("classify-tol-negative", lambda: meicp.classify(M3, tol=-1), r"^tol must lie in"),
     ("classify-exact-limit-100", lambda: meicp.classify(M3, exact_limit=100), r"^exact_limit must be ≤ 20"),
     ("classify-exact-limit-fraction", lambda: meicp.classify(M3, exact_limit=1.7), r"^exact_limit must be an integer"),
+    ("classify-dense-limit-huge", lambda: meicp.classify(M3, dense_limit=10 ** 9), r"^dense_limit must be ≤ 20000"),
+    ("lcp-max-n-huge", lambda: meicp.solve_lcp(M3, Q3, method="enumerate", max_n=40), r"^max_n must be ≤ 26"),
+    ("eicp-max-j-huge", lambda: meicp.solve_eicp(A2, np.eye(2), method="enumerate", max_j=40), r"^max_j must be ≤ 26"),
     ("classify-game-limit-negative", lambda: meicp.classify(M3, game_limit=-1), r"^game_limit must be ≥ 0"),
     ("classify-complex", lambda: meicp.classify(M3 * 1j), r"^M is complex"),
     ("classify-csr-column-1e8", lambda: meicp.classify(_bad_csr(10 ** 8)), r"^M: column index 100000000"),
@@ -224,6 +227,14 @@ def test_semismooth_without_a_start_eigenvalue_is_a_failure_status(B):
     assert r.status == "bad_start" and not r.success and "give lam0" in r.message
 
 
+def test_an_option_value_petsc_cannot_use_is_named_as_such():
+    """-meicp_as_eps_tol abc was reported as "PETSc error 63 … a different target may avoid it"."""
+    r = meicp.solve_eicp(A2, np.eye(2), method="active-set", options={"eps_tol": "abc"})
+    assert r.status == "petsc_error" and not r.success
+    assert "Input string abc has no numeric value; check the -meicp_as_* options" in r.message
+    assert "different target" not in r.message
+
+
 def _scene_with_density(tmp_path: Path, layer: str, rho: float) -> Path:
     text = (ROOT / "data" / "scenes" / "two_layers.toml").read_text()
     blocks = text.split("[[layers]]")
@@ -286,6 +297,18 @@ def _write(path: Path, content) -> Path:
     return path
 
 
+def _symlink(path: Path, target: str) -> Path:
+    path.symlink_to(target)
+    return path
+
+
+def _fifo(path: Path) -> Path:
+    import os
+
+    os.mkfifo(path)  # reading it would block for ever
+    return path
+
+
 def _mat(path: Path, **variables) -> Path:
     scipy.io.savemat(path, variables)
     return path
@@ -321,6 +344,8 @@ FILE_ERRORS = [
     ("dat-block-ends", lambda d: _write(d / "a.dat", "2\n1\n2 2\n1\n2 2\n1 1\n2\n"), ("M", "q"),
      r"the block row ends \[1, 1\] must increase strictly up to n = 2"),
     ("device-dev-zero", lambda d: Path("/dev/zero"), ("M", "q"), r"^/dev/zero: not a regular file"),
+    ("symlink-to-dev-zero", lambda d: _symlink(d / "zero.dat", "/dev/zero"), ("M", "q"), r"zero\.dat: not a regular file"),
+    ("fifo", lambda d: _fifo(d / "pipe.h5"), ("M", "q"), r"pipe\.h5: not a regular file"),
     ("directory", lambda d: d, ("M", "q"), r"not a regular file"),
     ("missing-file", lambda d: d / "missing.dat", ("M", "q"), r"missing\.dat: no such file"),
     ("unknown-suffix", lambda d: _write(d / "a.txt", "1"), ("M", "q"), r"unknown file type '\.txt'"),
@@ -419,7 +444,8 @@ def _files(d: Path) -> dict:
            "eicp.h5": _h5(d / "eicp.h5", A=A2, B=np.eye(2)),
            "eicp_scaled.h5": _h5(d / "eicp_scaled.h5", A=A2 * 1e300, B=np.eye(2) * 1e-300),
            "J17.mat": _mat(d / "J17.mat", A=A2, B=np.eye(2), J=np.array([[1.7]])),
-           "empty.mat": _write(d / "empty.mat", b"")}
+           "empty.mat": _write(d / "empty.mat", b""),
+           "zero.dat": _symlink(d / "zero.dat", "/dev/zero")}
     return {k: str(v) for k, v in out.items()}
 
 
@@ -443,6 +469,7 @@ CLI_CASES = [
     ("lcp-csr-column-5-auto", ["lcp", "{col5.h5}"], 2, r"column index 5 out of range"),
     ("lcp-complex", ["lcp", "{complex.h5}"], 2, r"complex\.h5: M is complex"),
     ("lcp-dev-zero", ["lcp", "/dev/zero"], 2, r"/dev/zero: not a regular file"),
+    ("lcp-symlink-to-dev-zero", ["lcp", "{zero.dat}"], 2, r"zero\.dat: not a regular file"),
     ("lcp-n-fraction", ["lcp", "{n37.dat}"], 2, r"n37\.dat: n \(the problem size\) must be an integer, got '3\.7'"),
     ("lcp-binary", ["lcp", "{binary.dat}"], 2, r"binary\.dat: binary data"),
     ("eicp-J-fraction", ["eicp", "{J17.mat}"], 2, r"J17\.mat: J has a non-integer index 1\.7"),

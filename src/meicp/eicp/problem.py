@@ -39,6 +39,8 @@ from ..core.validation import as_index_set, as_int, as_matrix, as_real, check_to
 DEFAULT_TOL = 1e-10
 #: x_j above this (relative to ‖x‖∞) counts as in the support
 SUPPORT_TOL = 1e-9
+#: the largest max_j accepted: 2^26 supports already take hours (a larger one is a hang)
+MAX_ENUMERATED = 26
 #: rounding allowance of a λ lower bound, in units of eps·(|lam_min| + max|A|/max|B|)
 LAM_ROUNDING = 1e3
 
@@ -234,9 +236,10 @@ def check_options(*, tol, lam_min=None, **kwargs) -> None:
             as_real(value, name)
     if lam_min is not None and kwargs.get("lam_max") is not None and kwargs["lam_max"] < lam_min:
         raise ProblemError(f"lam_max = {kwargs['lam_max']!r} is below lam_min = {lam_min!r}")
-    for name, minimum in (("nev", 1), ("max_iter", 1), ("max_j", 0), ("n_starts", 1), ("memory", 1)):
+    for name, minimum, maximum in (("nev", 1, None), ("max_iter", 1, None), ("max_j", 0, MAX_ENUMERATED),
+                                   ("n_starts", 1, None), ("memory", 1, None)):
         if kwargs.get(name) is not None:
-            as_int(kwargs[name], name, minimum=minimum)
+            as_int(kwargs[name], name, minimum=minimum, maximum=maximum)
     for name in ("spg_tol",):
         if kwargs.get(name) is not None:
             check_tol(kwargs[name], name)

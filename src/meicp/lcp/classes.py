@@ -71,6 +71,9 @@ from .game import GameValue, game_value
 #: (n = 12 well under a second, doubling per n: n = 20 takes minutes)
 MAX_EXACT_LIMIT = 20
 
+#: largest dense_limit accepted: a dense copy of order 20000 is 3.2 GB
+MAX_DENSE_LIMIT = 20000
+
 #: the class attributes, in report order
 CLASS_NAMES = (
     "symmetric", "spd", "psd", "positive_definite", "p_matrix", "p0", "z_matrix", "m_matrix",
@@ -804,13 +807,14 @@ def classify(M, *, exact_limit: int = 12, tol: float = 1e-10, dense_limit: int =
         a sparse LP with n = 3000 already takes seconds.
 
     Raises :class:`~meicp.core.errors.ProblemError` for non-square, empty, complex or
-    non-finite M, for tol outside (0, 1), and for an ``exact_limit`` above
-    ``MAX_EXACT_LIMIT`` (2^n subsets: n = 24 takes hours) or negative limits.
+    non-finite M, for tol outside (0, 1e-2], for an ``exact_limit`` above
+    ``MAX_EXACT_LIMIT`` (2^n subsets: n = 24 takes hours), a ``dense_limit`` above
+    ``MAX_DENSE_LIMIT`` (memory) or negative limits.
     """
     t0 = time.perf_counter()
     tol = check_tol(tol)
     exact_limit = as_int(exact_limit, "exact_limit", minimum=0, maximum=MAX_EXACT_LIMIT)
-    dense_limit = as_int(dense_limit, "dense_limit", minimum=0)
+    dense_limit = as_int(dense_limit, "dense_limit", minimum=0, maximum=MAX_DENSE_LIMIT)
     det_limit = as_int(det_limit, "det_limit", minimum=0)
     game_limit = as_int(game_limit, "game_limit", minimum=0)
     M = as_matrix(M, "M")

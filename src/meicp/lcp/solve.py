@@ -129,6 +129,8 @@ def check_options(kwargs: dict) -> dict:
     out = dict(kwargs)
     if out.get("max_iter") is not None:
         out["max_iter"] = as_int(out["max_iter"], "max_iter", minimum=1)
+    if out.get("max_n") is not None:  # enumerate: 2^n supports, 2^26 already take hours
+        out["max_n"] = as_int(out["max_n"], "max_n", minimum=0, maximum=26)
     for name in ("omega", "pivot_tol"):
         if out.get(name) is not None:
             out[name] = as_real(out[name], name)
