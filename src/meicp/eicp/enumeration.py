@@ -256,7 +256,8 @@ class _Enumerator:
         # λ near 0 are resolved to the rounding of A_RR relative to B_RR; on the first
         # pass they are left to the second (A balanced) when the window reaches them
         zone = ZONE * np.abs(AR).max() / max(np.abs(BR).max(), 1e-300)
-        if first and np.any(np.abs(values) <= zone) and view.zone_hits_window(zone):
+        second = first and bool(np.any(np.abs(lam[~infinite]) <= zone)) and bool(view.zone_hits_window(zone))
+        if second:
             self._one_support(self.view_a, R, nS)
         nF = self.F.size
         out = np.setdiff1d(self.J, R[nF:])
@@ -264,7 +265,7 @@ class _Enumerator:
         for value in values:
             if not view.in_window(value):
                 continue
-            countable = not (first and abs(value) <= zone and self._view_a is not None)
+            countable = not (second and abs(value) <= zone)  # the second pass redoes these
             # eigenspace basis: null space of (A_RR − λB_RR), to the pencil's scale (an
             # absolute threshold: a relative one is meaningless for a 1 × 1 block)
             Mv = AR - value * BR
