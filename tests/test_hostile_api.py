@@ -208,6 +208,21 @@ def test_eicp_lambda_beyond_double_precision_is_undecided_not_no_solution(a, b):
     assert r.coverage["out_of_range"] == 3
 
 
+@pytest.mark.parametrize("method", ["rayleigh", "active-set", "semismooth"])
+def test_iterative_eicp_methods_under_extreme_scaling(method):
+    """The iterative methods run on the pencil scaled to max|A| = max|B| = 1 and map λ back:
+    beyond double precision an honest out_of_range (before: overflow warnings, PETSc error 77
+    in active-set), within it the exact λ (1e300·λ of the unscaled pencil)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow on the way
+        r = meicp.solve_eicp(A2 * 1e300, np.eye(2) * 1e-300, method=method)
+        assert r.status == "out_of_range" and not r.solutions and "beyond double precision" in r.message
+        r = meicp.solve_eicp(A2 * 1e150, np.eye(2) * 1e-150, method=method)
+    assert r.success and all(np.isclose(s.lam / 1e300, LAMS2, rtol=1e-10).any() for s in r.solutions)
+
+
 def test_eicp_scaled_within_range_is_solved():
     r = meicp.solve_eicp(A2 * 1e150, np.eye(2) * 1e-150, method="enumerate")
     assert r.success and np.allclose(np.sort([s.lam for s in r.solutions]) / 1e300, np.sort(LAMS2), rtol=1e-12)
@@ -476,7 +491,10 @@ CLI_CASES = [
     ("eicp-empty-mat", ["eicp", "{empty.mat}"], 2, r"empty\.mat: empty file"),
     ("lcp-scaled-1e300", ["lcp", "{scaled.dat}"], 1, r"enumerate: out_of_range .* has a solution"),
     ("lcp-scaled-1e300-json", ["lcp", "{scaled.dat}", "--json"], 1, r'"status": "out_of_range"'),
-    ("eicp-scaled-1e300", ["eicp", "{eicp_scaled.h5}"], 1, r"enumerate: undecided, 0 solution\(s\) .* beyond double precision"),
+    ("eicp-scaled-1e300", ["eicp", "{eicp_scaled.h5}", "--method", "enumerate"], 1,
+     r"enumerate: undecided, 0 solution\(s\) .* beyond double precision"),
+    ("eicp-scaled-1e300-rayleigh", ["eicp", "{eicp_scaled.h5}", "--method", "rayleigh"], 1,
+     r"rayleigh: out_of_range, 0 solution\(s\) .* λ = 2\^1995·λ̃ is beyond double precision"),
     ("lcp-seed-still-solves", ["lcp", "{seed.dat}"], 0, r"x = \[1\. 0\. 2\.\]"),
 ]
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
+from .scaling import normalised, restore, scaled_value
 
 
 def _petsc_pair(problem: EiCPProblem, comm):
@@ -65,6 +66,12 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     first solve, follow the wanted eigenpair alone (nev = 1, shift just below its previous
     eigenvalue) — most of a solve's cost is shift-and-invert applications, and a shift next
     to the wanted eigenvalue needs a handful of them."""
+    scaled, E = normalised(problem)
+    if E is not None:  # shifts and the spurious value would overflow: solve scaled, map λ back
+        result = active_set(scaled, tol=tol, target=scaled_value(target, E), nev=nev,
+                            lam_min=scaled_value(lam_min, E), support0=support0, max_iter=max_iter, comm=comm,
+                            options=options, prefix=prefix, follow=follow)
+        return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     J = problem.J
     if support0 is None:

@@ -130,3 +130,78 @@ def refine_pair(A: np.ndarray, B: np.ndarray, R: np.ndarray, lam: float, x: np.n
     out = np.zeros(x.size)
     out[R] = xi
     return float(lam), out
+
+
+# -- the iterative methods: one global scaling, λ mapped back ------------------------------
+
+#: a pencil whose largest entries are within 2^±RANGE_EXPONENT of 1 is solved as given (no
+#: copy); beyond, the iterative methods run on A·2^ea, B·2^eb (max|A| ≈ max|B| ≈ 1): with
+#: A·1e300 and B·1e-300 their Rayleigh quotients, shifts and start eigenvalues overflowed
+RANGE_EXPONENT = 100
+
+
+def _scaled_matrix(M, exponent: int):
+    """M·2^exponent, exactly, as a new matrix (NumPy, SciPy sparse or PETSc Mat)."""
+    from ..core.operators import is_petsc_mat
+
+    if is_petsc_mat(M):
+        out = M.duplicate(copy=True)
+        out.scale(2.0 ** exponent)
+        return out
+    if hasattr(M, "tocsr"):
+        out = M.tocsr(copy=True)
+        out.data = np.ldexp(out.data, exponent)
+        return out
+    return np.ldexp(M, exponent)
+
+
+def normalised(problem):
+    """``(scaled, E)``: the problem with max|A| ≈ max|B| ≈ 1 and λ = 2^E·λ̃, or
+    ``(problem, None)`` when its scales are within 2^±RANGE_EXPONENT (nothing to do)."""
+    from .problem import EiCPProblem
+
+    a, b = problem.scales()
+    ea = -int(_exponent(a)) if a > 0 else 0
+    eb = -int(_exponent(b))
+    if abs(ea) <= RANGE_EXPONENT and abs(eb) <= RANGE_EXPONENT:
+        return problem, None
+    scaled = EiCPProblem(_scaled_matrix(problem.A, ea), _scaled_matrix(problem.B, eb), problem.J)
+    return scaled, eb - ea
+
+
+def scaled_value(value, E: int):
+    """A λ-valued argument (lam_min, target, lam0) in the scaled pencil's units."""
+    if value is None:
+        return None
+    with np.errstate(over="ignore", under="ignore"):
+        return float(np.ldexp(float(value), -E))
+
+
+def restore(problem, scaled, result, E: int, tol: float):
+    """Map a result of the scaled problem back: λ = 2^E·λ̃, each solution re-certified on
+    the original pencil; a λ beyond double precision makes the status ``out_of_range``."""
+    from ..core.operators import is_petsc_mat
+    from .problem import certify_pair
+
+    kept, beyond = [], []
+    for s in result.solutions:
+        with np.errstate(over="ignore", under="ignore"):
+            lam = float(np.ldexp(s.lam, E))
+        if not np.isfinite(lam) or (s.lam != 0 and abs(lam) < np.finfo(float).tiny):
+            beyond.append(s)
+            continue
+        sol = certify_pair(problem, lam, s.x)
+        (kept if sol.residual <= tol else beyond).append(sol)
+    result.solutions = kept
+    result.candidates = beyond + list(result.candidates)
+    result.coverage = dict(result.coverage, lam_exponent=E)
+    if result.status == "solved" and not kept:
+        result.status = "out_of_range"
+        result.message = (f"certified on the pencil scaled to max|A| = max|B| = 1, but λ = 2^{E}·λ̃ is beyond "
+                          f"double precision (λ̃ = {beyond[0].lam:.6g}; in candidates): {result.message}")
+    elif result.status == "solved" and beyond:
+        result.message += f"; {len(beyond)} more with λ beyond double precision (in candidates)"
+    for M in (scaled.A, scaled.B):
+        if is_petsc_mat(M):
+            M.destroy()
+    return result

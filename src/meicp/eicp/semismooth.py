@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.errors import ProblemError
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+from .scaling import normalised, restore, scaled_value
 
 #: SNES stops when ‖F‖₂ ≤ ATOL_FACTOR · (matrix scale); the certificate then decides
 ATOL_FACTOR = 1e-13
@@ -43,6 +44,11 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
     """
     if snes_type not in ("vinewtonrsls", "vinewtonssls"):
         raise ProblemError(f"snes_type must be 'vinewtonrsls' or 'vinewtonssls', got {snes_type!r}")
+    scaled, E = normalised(problem)
+    if E is not None:  # λ0 and the Jacobian's λB − A would overflow: solve scaled, map λ back
+        result = semismooth(scaled, tol=tol, x0=x0, lam0=scaled_value(lam0, E), max_iter=max_iter,
+                            snes_type=snes_type, options=options, lam_min=scaled_value(lam_min, E))
+        return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     A, B = _serial_pencil(problem)
     x_start = _start_vector(problem, B, x0)
