@@ -22,7 +22,7 @@ from ..core.errors import ProblemError, SolverNotFound
 from ..core.validation import is_symmetric
 from .active_set import active_set
 from .enumeration import enumerate_eicp
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 
 #: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
 AUTO_ENUMERATE_J = 16
@@ -73,6 +73,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     one that answered.  Every returned solution passed its certificate; see
     :class:`EiCPResult` for the statuses.
     """
+    check_options(tol=tol, lam_min=lam_min, **kwargs)
     if not 0.0 < tol < 1.0:
         raise ProblemError(f"tol must lie in (0, 1), got {tol!r}")
     if tol > LOOSE_TOL:
