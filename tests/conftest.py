@@ -6,7 +6,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
+#: the external reference sets the tests read (provenance and licences: tests/data/README.md)
+DATA = ROOT / "tests" / "data"
 
 
 def clean_env() -> dict:

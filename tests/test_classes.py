@@ -154,7 +154,7 @@ def test_game_value_seed_002_two_point_example():
 
 
 def test_game_value_tridiagonal_erratum():
-    """DESIGN §1: v = 1/5 at x* = y* = (0.3, 0.4, 0.3), not the seed's 1/3."""
+    """docs/design.md §12: v = 1/5 at x* = y* = (0.3, 0.4, 0.3), not the seed's 1/3."""
     g = game_value(TRIDIAG)
     assert g.success and g.residual <= 1e-9
     assert g.value == pytest.approx(0.2, abs=1e-12)

@@ -1,4 +1,4 @@
-"""EiCP/MEiCP: enumeration against DESIGN §3's oracles and an independent brute force,
+"""EiCP/MEiCP: enumeration against docs/design.md §4.4's oracles and an independent brute force,
 active-set answers among the enumerated ones, certificates, failure statuses, bad input."""
 
 import itertools

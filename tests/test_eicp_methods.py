@@ -1,7 +1,7 @@
 """Two independent EiCP methods: SPG on the Rayleigh quotient (meicp.eicp.rayleigh) and
 semismooth Newton on PETSc SNES VI (meicp.eicp.semismooth).
 
-Oracles (DESIGN §3), computed here without the library:
+Oracles (docs/design.md §4.4), computed here without the library:
 - ``brute_force``: every nonempty support S ⊆ J, the reduced pencil on R = F ∪ S by
   ``scipy.linalg.eigh``, eigenpairs with ξ_S > 0 and (λB − A)_{J∖S} ξ ≥ 0 (both signs of ξ
   when S = ∅, since then nothing fixes the sign);
@@ -11,10 +11,9 @@ Oracles (DESIGN §3), computed here without the library:
   irreducible, so by Perron–Frobenius only its *largest* eigenvalue has a positive
   eigenvector, i.e. the *smallest* eigenvalue of B_SS⁻¹A_SS; and outside S,
   w_j = −Σ_{i∈S} A_ji ξ_i > 0, so every S ≠ ∅ gives a solution.
-- the Niu et al. set in shared/data/eicp-niu (no reference values: certificates only).
+- the Niu et al. set in tests/data/eicp-niu (no reference values: certificates only).
 """
 
-import glob
 import itertools
 import math
 import os
@@ -31,7 +30,7 @@ from meicp.eicp.problem import EiCPProblem
 from meicp.eicp.rayleigh import project_simplex, rayleigh
 from meicp.eicp.semismooth import semismooth
 
-from .conftest import SHARED
+from .conftest import DATA
 
 TOL = 1e-10
 
@@ -317,8 +316,7 @@ def test_semismooth_converges_from_near_a_known_solution(data, snes_type, pick):
 # the Niu et al. set (symmetric EiCPs, n = 50..200, no reference values)
 # ------------------------------------------------------------------------------------------
 
-NIU = sorted(f for f in glob.glob(str(SHARED / "data" / "eicp-niu" / "*.mat"))
-             if "RANDQEICP" not in f)
+NIU = sorted(str(f) for f in (DATA / "eicp-niu").glob("*.mat"))
 
 
 def _niu(path):
@@ -326,7 +324,6 @@ def _niu(path):
     return EiCPProblem.from_data(d["A"], d["B"]), d["x0"].ravel()
 
 
-@pytest.mark.skipif(len(NIU) != 6, reason="shared/data/eicp-niu not present")
 @pytest.mark.parametrize("path", NIU, ids=[os.path.basename(f) for f in NIU])
 def test_niu_rayleigh_solves_every_problem(path):
     problem, x0 = _niu(path)
@@ -337,7 +334,6 @@ def test_niu_rayleigh_solves_every_problem(path):
     assert from_x0.success and from_x0.solutions[0].residual <= TOL
 
 
-@pytest.mark.skipif(len(NIU) != 6, reason="shared/data/eicp-niu not present")
 def test_niu_semismooth_never_claims_an_uncertified_solution():
     solved = {}
     for path in NIU:
@@ -355,7 +351,6 @@ def test_niu_semismooth_never_claims_an_uncertified_solution():
     assert {"NEP_rdb200.mtx.mat", "NEP_tub100.mtx.mat"} <= set(solved.get("vinewtonrsls", []))
 
 
-@pytest.mark.skipif(len(NIU) != 6, reason="shared/data/eicp-niu not present")
 @pytest.mark.parametrize("path", NIU, ids=[os.path.basename(f) for f in NIU])
 def test_niu_semismooth_polishes_from_the_rayleigh_solution(path):
     """Third opinion: Newton started 1e-3 away from SPG's solution (same zeros) returns it."""

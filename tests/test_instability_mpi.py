@@ -1,4 +1,4 @@
-"""The instability analysis on 2 ranks gives the same modes as on 1 (DESIGN target 1e-8)."""
+"""The instability analysis on 2 ranks gives the same modes as on 1 (to 1e-8)."""
 
 import numpy as np
 import pytest

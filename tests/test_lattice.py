@@ -1,4 +1,4 @@
-"""The layered lattice (seed 000 §II, DESIGN §4-5): scene files, K and M, output.
+"""The layered lattice (seed 000 §II; docs/design.md §5, §10.1): scene files, K and M, output.
 
 Verification, each able to catch a real bug:
 (a) the sheared 4-mass cell against the seed's block K written out here from its formulas,
@@ -221,7 +221,7 @@ def test_scene_file_errors_name_the_file(tmp_path):
 
 def seed_cell_K(p, kA, kB, kAB, *, errata=True, erratum=None):
     """Seed 000 §II's 8×8 K of the 4-mass cell (nodes 1, 2 in A; 3 above 1, 4 above 2 in B),
-    written from the paper's block formulas.  ``errata=True`` applies DESIGN §1: coupling
+    written from the paper's block formulas.  ``errata=True`` applies docs/design.md §12: coupling
     blocks negative, S with θ, each diagonal with its own angle (and each horizontal with its
     own, for a general quadrilateral).  ``erratum`` reverts a single one of them."""
     p1, p2, p3, p4 = p

@@ -13,9 +13,9 @@ from meicp.io.problem_files import read_problem, read_siconos_lcp, write_hdf5_pr
 from meicp.lcp.problem import LCPProblem, relative_residual
 from meicp.lcp.solve import solve_lcp
 
-from .conftest import SHARED, meicp_cmd, run
+from .conftest import DATA, meicp_cmd, run
 
-SICONOS_DIR = SHARED / "data" / "siconos-lcp"
+SICONOS_DIR = DATA / "siconos-lcp"
 SICONOS_FILES = sorted(SICONOS_DIR.glob("*.dat"))
 NO_SOLUTION = {"lcp_Pang_isolated_sol_perturbed.dat"}
 DENSE_METHODS = ["lemke", "enumerate", "newton"]

@@ -7,6 +7,10 @@ shared notes and the README for the public API.
 
 __version__ = "0.1.0"
 
+from .core.environment import require_python_stack  # noqa: E402
+
+require_python_stack()  # NumPy, SciPy, mpi4py from Debian: a clear message if not
+
 from .core.errors import ConvergenceError, MeicpError, ProblemError, SolverNotFound  # noqa: E402
 from .core.results import Result  # noqa: E402
 from .core import validation  # noqa: E402,F401

@@ -9,6 +9,7 @@ import numpy as np
 from ..core.log import rank0_print
 from ..eicp.solve import available_methods, solve_eicp
 from ..io.problem_files import read_problem
+from .arguments import finite, tolerance
 from .exit import Exit
 
 
@@ -17,9 +18,9 @@ def register(sub) -> None:
     p.add_argument("file", help="HDF5 (.h5) or MATLAB (.mat) with A, B and optional J (0-based indices)")
     p.add_argument("--method", default="auto", choices=available_methods())
     p.add_argument("--all", action="store_true", help="every solution (support enumeration, small |J|)")
-    p.add_argument("--lam-min", type=float, default=None, help="only solutions with λ ≥ this")
-    p.add_argument("--target", type=float, default=0.0, help="shift for the SLEPc solves (active-set)")
-    p.add_argument("--tol", type=float, default=1e-10, help="relative certificate tolerance")
+    p.add_argument("--lam-min", type=finite, default=None, help="only solutions with λ ≥ this (finite)")
+    p.add_argument("--target", type=finite, default=0.0, help="shift for the SLEPc solves (active-set)")
+    p.add_argument("--tol", type=tolerance, default=1e-10, help="relative certificate tolerance, in (0, 1e-2]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(run=run)
 
@@ -28,7 +29,7 @@ def run(args) -> int:
     from mpi4py import MPI
 
     data = read_problem(args.file, names=("A", "B", "J"))
-    J = None if "J" not in data else np.asarray(data["J"]).ravel().astype(np.int64)
+    J = data.get("J")  # checked by read_problem: integer indices in range (1.7 is an error)
     kwargs = {"target": args.target} if args.method in ("active-set", "auto") else {}
     r = solve_eicp(data["A"], data["B"], J=J, method=args.method, all_solutions=args.all,
                    lam_min=args.lam_min, tol=args.tol, comm=MPI.COMM_WORLD, **kwargs)

@@ -8,8 +8,9 @@ import numpy as np
 
 from ..core.log import rank0_print
 from ..io.problem_files import read_problem
-from ..lcp.classes import classify
+from ..lcp.classes import MAX_EXACT_LIMIT, classify
 from ..lcp.solve import available_methods, solve_lcp
+from .arguments import integer, tolerance
 from .exit import Exit
 
 
@@ -17,20 +18,27 @@ def register(sub) -> None:
     p = sub.add_parser("lcp", help="solve LCP(q, M) from a Siconos .dat or an HDF5 file (M, q)")
     p.add_argument("file")
     p.add_argument("--method", default="auto", choices=available_methods())
-    p.add_argument("--tol", type=float, default=1e-10, help="relative certificate tolerance")
+    p.add_argument("--tol", type=tolerance, default=1e-10, help="relative certificate tolerance, in (0, 1e-2]")
     p.add_argument("--all", action="store_true", help="every solution (support enumeration, small n)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(run=run_lcp)
 
     p = sub.add_parser("classify", help="matrix classes of M (P, Q, R0, Z, copositive, ...) and game value")
     p.add_argument("file")
-    p.add_argument("--exact-limit", type=int, default=12, help="largest n for the exponential exact tests")
+    p.add_argument("--exact-limit", type=integer(0, MAX_EXACT_LIMIT), default=12,
+                   help=f"largest n for the exponential exact tests (0 to {MAX_EXACT_LIMIT})")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(run=run_classify)
 
 
+def _number(v):
+    """A float for JSON; NaN and ±inf (not JSON) as None."""
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
 def _vector(x):
-    return None if x is None else [float(v) for v in x]
+    return None if x is None else [_number(v) for v in x]
 
 
 def run_lcp(args) -> int:
@@ -41,8 +49,8 @@ def run_lcp(args) -> int:
         rank0_print(json.dumps({
             "file": args.file, "n": int(np.size(data["q"])), "method": r.method, "status": r.status,
             "success": r.success, "message": r.message, "iterations": r.iterations,
-            "residual": r.residual, "min_x": r.min_x, "min_w": r.min_w,
-            "complementarity": r.complementarity, "x": _vector(r.x), "w": _vector(r.w),
+            "residual": _number(r.residual), "min_x": _number(r.min_x), "min_w": _number(r.min_w),
+            "complementarity": _number(r.complementarity), "x": _vector(r.x), "w": _vector(r.w),
             "solutions": [_vector(s) for s in r.solutions], "attempts": r.attempts,
             "timings": r.timings}, indent=2))
     else:

@@ -1,9 +1,16 @@
 """Input checks that raise :class:`~meicp.core.errors.ProblemError` naming the argument.
 
-Plain NumPy/SciPy: PETSc matrices are checked where they are used (collectively).
+Plain NumPy/SciPy: PETSc matrices are checked where they are used (collectively).  Every
+check runs before compiled code sees the data: a sparse matrix's index arrays are checked
+for range and order (SciPy's constructors do not, and an out-of-range column index then
+reads or writes outside the arrays), complex data is refused rather than cast (the
+imaginary part would be dropped), and tolerances, bounds and integer arguments are checked
+for range, finiteness and integrality.
 """
 
 from __future__ import annotations
+
+import numbers
 
 import numpy as np
 import scipy.sparse as sp
@@ -11,21 +18,100 @@ import scipy.sparse as sp
 from .errors import ProblemError
 
 
+def check_real(values, name: str) -> None:
+    """Complex data is an error, never cast: the imaginary part would be dropped silently."""
+    if np.iscomplexobj(values):
+        raise ProblemError(f"{name} is complex ({values.dtype}); meicp solves real problems "
+                           f"(pass {name}.real if the imaginary part is meant to be dropped)")
+
+
+def check_compressed(indptr, indices, n_major: int, n_minor: int, name: str, *, nnz: int | None = None,
+                     major: str = "row", minor: str = "column") -> None:
+    """The index arrays of a compressed sparse matrix (CSR: major = rows): integer, 1-D,
+    ``indptr`` of length n_major + 1 from 0 to nnz and nondecreasing, every index in
+    ``[0, n_minor)``.  Raises ProblemError naming what is wrong."""
+    indptr, indices = np.asarray(indptr), np.asarray(indices)
+    for label, arr in (("indptr", indptr), ("indices", indices)):
+        if arr.ndim != 1 or not (np.issubdtype(arr.dtype, np.integer) or arr.size == 0):
+            raise ProblemError(f"{name}: {label} must be a 1-D integer array, got {arr.dtype} shape {arr.shape}")
+    nnz = indices.size if nnz is None else nnz
+    if indptr.size != n_major + 1:
+        raise ProblemError(f"{name}: indptr has length {indptr.size}, expected {n_major + 1} "
+                           f"(one more than the number of {major}s)")
+    if indptr[0] != 0 or indptr[-1] != nnz or indices.size != nnz:
+        raise ProblemError(f"{name}: indptr runs from {int(indptr[0])} to {int(indptr[-1])} but there are "
+                           f"{indices.size} indices and {nnz} values (expected 0 to {nnz}, all equal)")
+    steps = np.diff(indptr)
+    if np.any(steps < 0):
+        k = int(np.argmax(steps < 0))
+        raise ProblemError(f"{name}: indptr decreases at {major} {k} ({int(indptr[k])} then {int(indptr[k + 1])})")
+    if indices.size:
+        lo, hi = int(indices.min()), int(indices.max())
+        if lo < 0 or hi >= n_minor:
+            bad = lo if lo < 0 else hi
+            raise ProblemError(f"{name}: {minor} index {bad} out of range [0, {n_minor})")
+
+
+def check_shape(shape, name: str) -> tuple[int, int]:
+    """A matrix shape: two nonnegative integers."""
+    try:
+        dims = tuple(shape)
+    except TypeError:
+        raise ProblemError(f"{name}: shape must be two integers, got {shape!r}") from None
+    if len(dims) != 2:
+        raise ProblemError(f"{name}: shape must be two integers, got {dims!r}")
+    return tuple(as_int(d, f"{name} shape", minimum=0) for d in dims)
+
+
+def checked_csr(M, name: str = "M") -> sp.csr_matrix:
+    """A SciPy sparse matrix as float64 CSR, its index arrays checked before conversion."""
+    check_real(M, name)
+    n_rows, n_cols = check_shape(M.shape, name)
+    fmt = M.format
+    if fmt in ("csr", "csc"):
+        major, minor = (n_rows, n_cols) if fmt == "csr" else (n_cols, n_rows)
+        if np.ndim(M.data) != 1:
+            raise ProblemError(f"{name}: data must be a 1-D array, got shape {np.shape(M.data)}")
+        check_compressed(M.indptr, M.indices, major, minor, name, nnz=np.size(M.data),
+                         major="row" if fmt == "csr" else "column",
+                         minor="column" if fmt == "csr" else "row")
+    elif fmt == "coo":
+        for label, idx, bound in (("row", M.row, n_rows), ("column", M.col, n_cols)):
+            idx = np.asarray(idx)
+            if idx.shape != np.shape(M.data):
+                raise ProblemError(f"{name}: {label} indices and values differ in length")
+            if idx.size and (idx.min() < 0 or idx.max() >= bound):
+                bad = int(idx.min()) if idx.min() < 0 else int(idx.max())
+                raise ProblemError(f"{name}: {label} index {bad} out of range [0, {bound})")
+    elif fmt == "bsr":
+        R, C = M.blocksize
+        check_compressed(M.indptr, M.indices, n_rows // R, n_cols // C, name, nnz=len(M.data),
+                         major="block row", minor="block column")
+    try:
+        return sp.csr_matrix(M, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(f"{name} is not a numeric sparse matrix: {exc}") from None
+
+
 def as_matrix(M, name: str = "M", *, square: bool = True, allow_sparse: bool = True):
     """Return ``M`` as a float64 ndarray or SciPy CSR matrix after checking it.
 
-    Rejects empty, non-2-D, non-square (when ``square``), non-numeric and non-finite input.
+    Rejects empty, non-2-D, non-square (when ``square``), complex, non-numeric and
+    non-finite input, and sparse matrices with inconsistent index arrays.
     """
     if sp.issparse(M):
+        M = checked_csr(M, name)
+        data = M.data
         if not allow_sparse:
             M = M.toarray()
-        else:
-            M = sp.csr_matrix(M, dtype=np.float64)
-            data = M.data
-    if not sp.issparse(M):
+    else:
         try:
-            M = np.array(M, dtype=np.float64)
+            arr = np.asarray(M)
+            check_real(arr, name)
+            M = np.array(arr, dtype=np.float64)
         except (TypeError, ValueError) as exc:
+            if isinstance(exc, ProblemError):
+                raise
             raise ProblemError(f"{name} is not a numeric matrix: {exc}") from None
         data = M
     if M.ndim != 2:
@@ -40,10 +126,14 @@ def as_matrix(M, name: str = "M", *, square: bool = True, allow_sparse: bool = T
 
 
 def as_vector(q, n: int, name: str = "q") -> np.ndarray:
-    """Return ``q`` as a finite float64 vector of length ``n``."""
+    """Return ``q`` as a finite real float64 vector of length ``n``."""
     try:
-        q = np.array(q, dtype=np.float64)
+        arr = np.asarray(q)
+        check_real(arr, name)
+        q = np.array(arr, dtype=np.float64)
     except (TypeError, ValueError) as exc:
+        if isinstance(exc, ProblemError):
+            raise
         raise ProblemError(f"{name} is not a numeric vector: {exc}") from None
     if q.ndim == 2 and 1 in q.shape:
         q = q.ravel()
@@ -56,11 +146,68 @@ def as_vector(q, n: int, name: str = "q") -> np.ndarray:
     return q
 
 
+# -- scalar arguments --------------------------------------------------------------------
+
+def as_real(value, name: str, *, finite: bool = True) -> float:
+    """A real number (not bool, not complex, not a string), finite unless ``finite=False``;
+    NaN is always refused."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
+        raise ProblemError(f"{name} must be a real number, got {value!r}")
+    v = float(value)
+    if np.isnan(v) or (finite and not np.isfinite(v)):
+        raise ProblemError(f"{name} must be a finite number, got {v!r}")
+    return v
+
+
+#: the loosest certificate tolerance accepted: at 0.9 a certificate accepted w = −2 with
+#: |q| = 2 as an LCP solution; at 1e-2 (the loosest the accuracy benchmarks use) a certified
+#: λ was already found 37 % off
+MAX_TOL = 1e-2
+
+
+def check_tol(tol, name: str = "tol") -> float:
+    """A relative certificate tolerance: a real number in (0, MAX_TOL]."""
+    if isinstance(tol, (bool, np.bool_)) or not isinstance(tol, (numbers.Real, np.floating, np.integer)):
+        raise ProblemError(f"{name} must be a real number in (0, {MAX_TOL:g}], got {tol!r}")
+    v = float(tol)
+    if not 0.0 < v <= MAX_TOL:  # NaN fails this too
+        raise ProblemError(f"{name} must lie in (0, {MAX_TOL:g}] (a relative certificate tolerance; "
+                           f"a looser one certifies nothing), got {v!r}")
+    return v
+
+
+def as_int(value, name: str, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """An integer argument; an integral float (3.0) is accepted, 1.7 or 1e300 is not."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ProblemError(f"{name} must be an integer, got {value!r}")
+    if isinstance(value, (numbers.Integral, np.integer)):
+        v = int(value)
+    elif isinstance(value, (numbers.Real, np.floating)) and np.isfinite(value) and float(value).is_integer() \
+            and abs(value) < 2 ** 53:
+        v = int(value)
+    else:
+        raise ProblemError(f"{name} must be an integer, got {value!r}")
+    if minimum is not None and v < minimum:
+        raise ProblemError(f"{name} must be ≥ {minimum}, got {v}")
+    if maximum is not None and v > maximum:
+        raise ProblemError(f"{name} must be ≤ {maximum}, got {v}")
+    return v
+
+
 def scale(M) -> float:
     """A matrix scale for relative tolerances: the largest absolute entry (1 for zero)."""
     data = M.data if sp.issparse(M) else np.asarray(M)
     s = float(np.max(np.abs(data))) if data.size else 0.0
     return s if s > 0 else 1.0
+
+
+def row_max_abs(M) -> np.ndarray:
+    """``max_j |m_ij|`` for every row i of a NumPy or SciPy matrix: the row scales of the
+    row-wise certificates, which hold whatever the scale of each row (a PETSc Mat:
+    :func:`meicp.petsc.mat.row_max_abs`)."""
+    if sp.issparse(M):
+        return np.asarray(abs(M).max(axis=1).toarray()).ravel()
+    return np.abs(np.asarray(M)).max(axis=1)
 
 
 def symmetry_error(M) -> float:
@@ -105,22 +252,33 @@ def check_spd(M, name: str = "B", rtol: float = 1e-12) -> None:
 
 
 def as_index_set(J, n: int, name: str = "J") -> np.ndarray:
-    """Return a sorted int array of distinct indices in ``[0, n)``; ``None`` means all."""
+    """Return a sorted int array of distinct indices in ``[0, n)``; ``None`` means all.
+
+    A boolean mask of length n is accepted; so are floats with integral values (MATLAB
+    files store indices as doubles), but 1.7 is an error, never truncated to 1."""
     if J is None:
         return np.arange(n)
-    J = np.asarray(J)
+    try:
+        J = np.asarray(J)
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(f"{name} is not an array of indices: {exc}") from None
     if J.dtype == bool:
         if J.shape != (n,):
             raise ProblemError(f"{name} as a mask must have length {n}, got shape {J.shape}")
         return np.flatnonzero(J)
     if J.size == 0:
         return np.zeros(0, dtype=np.int64)
-    if J.ndim != 1 or not np.issubdtype(J.dtype, np.integer):
+    if J.ndim != 1 or not (np.issubdtype(J.dtype, np.integer) or np.issubdtype(J.dtype, np.floating)):
         raise ProblemError(f"{name} must be a 1-D array of integer indices, got {J.dtype} shape {J.shape}")
+    if np.issubdtype(J.dtype, np.floating):
+        bad = J[~np.isfinite(J) | (J != np.round(J))]
+        if bad.size:
+            raise ProblemError(f"{name} has a non-integer index {bad[0]!r} (indices must be integers)")
     bad = J[(J < 0) | (J >= n)]
     if bad.size:
-        raise ProblemError(f"{name} has index {int(bad[0])} out of range [0, {n})")
+        raise ProblemError(f"{name} has index {bad[0]:.15g} out of range [0, {n})")
+    J = J.astype(np.int64)
     uniq, counts = np.unique(J, return_counts=True)
     if np.any(counts > 1):
         raise ProblemError(f"{name} repeats index {int(uniq[np.argmax(counts > 1)])}")
-    return uniq.astype(np.int64)
+    return uniq

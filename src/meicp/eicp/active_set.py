@@ -21,6 +21,7 @@ Collective on the matrices' communicator; SciPy input runs on ``COMM_SELF``.
 
 from __future__ import annotations
 
+import re
 import time
 
 import numpy as np
@@ -30,6 +31,7 @@ from ..petsc import import_petsc
 from ..petsc.mat import mat_from_scipy
 from ..petsc.reduced_pencil import ReducedPencilSolver
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
+from .scaling import normalised, restore, scaled_value
 
 
 def _petsc_pair(problem: EiCPProblem, comm):
@@ -65,6 +67,12 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     first solve, follow the wanted eigenpair alone (nev = 1, shift just below its previous
     eigenvalue) — most of a solve's cost is shift-and-invert applications, and a shift next
     to the wanted eigenvalue needs a handful of them."""
+    scaled, E = normalised(problem)
+    if E is not None:  # shifts and the spurious value would overflow: solve scaled, map λ back
+        result = active_set(scaled, tol=tol, target=scaled_value(target, E), nev=nev,
+                            lam_min=scaled_value(lam_min, E), support0=support0, max_iter=max_iter, comm=comm,
+                            options=options, prefix=prefix, follow=follow)
+        return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     J = problem.J
     if support0 is None:
@@ -106,9 +114,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                 else:
                     pairs = solver.solve(removed, initial)
             except PETSc.Error as exc:  # e.g. an exactly singular shifted matrix at the target
-                status = "petsc_error"
-                message = (f"SLEPc/PETSc error {exc.ierr} in eigen-solve {it} (support of size {S.size}); "
-                           f"a different target (-{prefix}eps_target) may avoid it")
+                status, message = "petsc_error", _petsc_error_message(exc, it, S.size, prefix)
                 break
             if lam_min is not None:
                 floor = lam_floor(lam_min, scales)  # rounding only: tol is not a λ tolerance
@@ -163,6 +169,22 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                            f"solution exists (use method='enumerate' for small |J|)")
     result.timings["solve"] = time.perf_counter() - t0
     return result
+
+
+_RANK_TAG = re.compile(r"^\[\d+\]\s*")  # PETSc's "[0] " before each line of its error text
+#: PETSc error codes of a wrong argument or option value (PETSC_ERR_SUP, PETSC_ERR_ARG_*)
+_ARGUMENT_ERRORS = (56, 60, 61, 62, 63)
+
+
+def _petsc_error_message(exc, it: int, support: int, prefix: str) -> str:
+    """What went wrong, with PETSc's own last line, and the hint that fits the error: a bad
+    option value (``-meicp_as_eps_tol abc``) is not cured by another target."""
+    text = str(exc).strip()
+    detail = ": " + _RANK_TAG.sub("", text.splitlines()[-1].strip()) if text else ""
+    hint = (f"check the -{prefix}* options and the [petsc] table (a value PETSc cannot use)"
+            if getattr(exc, "ierr", None) in _ARGUMENT_ERRORS
+            else f"a different target (-{prefix}eps_target) may avoid it")
+    return f"SLEPc/PETSc error {getattr(exc, 'ierr', '?')} in eigen-solve {it} (support of size {support}){detail}; {hint}"
 
 
 def _violations(problem, S, removed, lam, xi, scales):

@@ -44,6 +44,7 @@ from ..core.errors import ProblemError
 from ..petsc.mat import mat_to_scipy, to_dense
 from ..core.validation import check_spd, check_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_pair
+from .scaling import normalised, restore, scaled_value
 
 #: above this reduced size the polishing eigen-solve is sparse (eigsh with a shift)
 DENSE_POLISH_LIMIT = 2000
@@ -79,6 +80,11 @@ def rayleigh(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, max_iter: int = 
     t0 = time.perf_counter()
     if sense not in ("max", "min", "both"):
         raise ProblemError(f"sense must be 'max', 'min' or 'both', got {sense!r}")
+    scaled, E = normalised(problem)
+    if E is not None:  # A·1e300, B·1e-300: quotients would overflow; solve scaled, map λ back
+        result = rayleigh(scaled, tol=tol, max_iter=max_iter, starts=starts, n_starts=n_starts, seed=seed,
+                          lam_min=scaled_value(lam_min, E), sense=sense, spg_tol=spg_tol, memory=memory)
+        return restore(problem, scaled, result, E, tol)
     A, B = _serial_symmetric_pencil(problem)
     scales = problem.scales()
     quotient = _Quotient(A, B)

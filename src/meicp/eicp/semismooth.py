@@ -19,10 +19,12 @@ import time
 import numpy as np
 
 from ..core.errors import ProblemError
+from ..petsc import import_petsc
 from ..petsc.comm import comm_size
 from ..petsc.eicp_vi import snes_vi_eicp
 from ..petsc.mat import mat_to_scipy
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+from .scaling import normalised, restore, scaled_value
 
 #: SNES stops when ‖F‖₂ ≤ ATOL_FACTOR · (matrix scale); the certificate then decides
 ATOL_FACTOR = 1e-13
@@ -46,17 +48,39 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
     """
     if snes_type not in ("vinewtonrsls", "vinewtonssls"):
         raise ProblemError(f"snes_type must be 'vinewtonrsls' or 'vinewtonssls', got {snes_type!r}")
+    scaled, E = normalised(problem)
+    if E is not None:  # λ0 and the Jacobian's λB − A would overflow: solve scaled, map λ back
+        result = semismooth(scaled, tol=tol, x0=x0, lam0=scaled_value(lam0, E), max_iter=max_iter,
+                            snes_type=snes_type, options=options, lam_min=scaled_value(lam_min, E))
+        return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     A, B = _serial_pencil(problem)
     x_start = _start_vector(problem, B, x0)
-    Bx = B @ x_start
-    lam_start = float(x_start @ (A @ x_start)) / float(x_start @ Bx) if lam0 is None else float(lam0)
+    if x_start is None:
+        return _no_start(t0, snes_type, "the default start x0 (all ones) has x0ᵀBx0 ≤ 0, so it cannot be "
+                         "normalised to xᵀBx = 1 (B singular or indefinite on it): give x0")
+    if lam0 is not None and not np.isfinite(lam0):
+        raise ProblemError(f"lam0 must be finite, got {lam0!r}")
+    xBx = float(x_start @ (B @ x_start))
+    rounding = 1e3 * np.finfo(float).eps * problem.scales()[1] * float(x_start @ x_start)
+    if lam0 is None and not (np.isfinite(xBx) and abs(xBx) > rounding):
+        return _no_start(t0, snes_type, f"x0ᵀBx0 = {xBx:g} (B singular on the start), so the Rayleigh "
+                         "quotient gives no start eigenvalue: give lam0 or another x0")
+    lam_start = float(x_start @ (A @ x_start)) / xBx if lam0 is None else float(lam0)
     if not np.isfinite(lam_start):
-        raise ProblemError(f"lam0 must be finite, got {lam_start} (x0ᵀBx0 = 0?)")
+        return _no_start(t0, snes_type, f"the start eigenvalue x0ᵀAx0 / x0ᵀBx0 = {lam_start} is not finite: "
+                         "give lam0")
     scales = problem.scales()
-    x, lam, its, reason, converged, seconds = snes_vi_eicp(
-        A, B, problem.J, x_start, lam_start, atol=ATOL_FACTOR * max(scales[0], scales[1], 1.0),
-        max_iter=max_iter, snes_type=snes_type, options=options)
+    PETSc = import_petsc()
+    try:
+        x, lam, its, reason, converged, seconds = snes_vi_eicp(
+            A, B, problem.J, x_start, lam_start, atol=ATOL_FACTOR * max(scales[0], scales[1], 1.0),
+            max_iter=max_iter, snes_type=snes_type, options=options)
+    except PETSc.Error as exc:  # e.g. MUMPS on an exactly singular bordered Jacobian
+        result = _no_start(t0, snes_type, f"PETSc error {getattr(exc, 'ierr', '?')} in SNES {snes_type}: "
+                           + str(exc).strip().splitlines()[-1].strip())
+        result.status = "petsc_error"
+        return result
     result = EiCPResult(method="semismooth", iterations=its,
                         coverage={"snes_type": snes_type, "snes_reason": reason,
                                   "lam0": lam_start},
@@ -90,6 +114,12 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
     return result
 
 
+def _no_start(t0: float, snes_type: str, why: str) -> EiCPResult:
+    """A failure before or instead of Newton's first step: a status, never a traceback."""
+    return EiCPResult(method="semismooth", status="bad_start", message=why,
+                      coverage={"snes_type": snes_type}, timings={"total": time.perf_counter() - t0})
+
+
 def _serial_pencil(problem: EiCPProblem):
     """A, B as ndarray / CSR; a PETSc Mat is gathered only when it lives on one rank."""
     if not problem.distributed:
@@ -100,8 +130,9 @@ def _serial_pencil(problem: EiCPProblem):
     return mat_to_scipy(problem.A), mat_to_scipy(problem.B)
 
 
-def _start_vector(problem: EiCPProblem, B, x0) -> np.ndarray:
-    """A start that satisfies the normalisation g(x) = 0 and the bounds x_J ≥ 0."""
+def _start_vector(problem: EiCPProblem, B, x0) -> np.ndarray | None:
+    """A start that satisfies the normalisation g(x) = 0 and the bounds x_J ≥ 0 (None when
+    the default start cannot be normalised)."""
     n, J = problem.n, problem.J
     if x0 is None:
         x = np.zeros(n)
@@ -120,6 +151,8 @@ def _start_vector(problem: EiCPProblem, B, x0) -> np.ndarray:
                                "normalisation eᵀx_J = 1 only admits solutions with x_J ≠ 0")
         return x / total
     xBx = float(x @ (B @ x))
-    if xBx <= 0:
+    if not xBx > 0:
+        if x0 is None:
+            return None  # the default start does not fit B: a failure status, not bad input
         raise ProblemError("x0 must have x0ᵀBx0 > 0 (normalisation xᵀBx = 1 with J = ∅)")
     return x / np.sqrt(xBx)

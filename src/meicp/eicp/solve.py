@@ -4,7 +4,11 @@
 - ``active-set``: one certified solution of a large sparse or distributed pencil (SLEPc).
 - ``rayleigh``: symmetric A, B with B SPD — stationary points of the Rayleigh quotient.
 - ``semismooth``: the MEiCP as a complementarity system in (x, λ) on PETSc SNES VI.
-- ``auto``: ``enumerate`` when |J| ≤ 16 and the pencil is small, ``active-set`` otherwise.
+- ``auto``: a portfolio (:func:`auto_order`): ``enumerate`` when small; ``rayleigh`` when
+  A and B are symmetric (B SPD) and serial; ``active-set``; ``semismooth`` from the best
+  candidate the others reached.  It stops at the first certified answer (or the
+  enumeration's proof that there is none) and records every method it ran, with the
+  status and message that ended it, in ``result.attempts``.
 """
 
 from __future__ import annotations
@@ -12,17 +16,24 @@ from __future__ import annotations
 import logging
 import time
 
+import numpy as np
+
 from ..core.errors import ProblemError, SolverNotFound
+from ..core.validation import is_symmetric
 from ..petsc.comm import mpi_comm
 from .active_set import active_set
 from .enumeration import enumerate_eicp
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult
+from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
 from .semismooth import semismooth
 
 #: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
 AUTO_ENUMERATE_J = 16
 AUTO_ENUMERATE_N = 400
+#: auto tries rayleigh up to this n: SPG needs only products, but from 8 starts of up to
+#: 5000 iterations each, and its SPD check of a non-diagonal B is a dense Cholesky; past it
+#: the SLEPc active-set search leads
+AUTO_RAYLEIGH_N = 5000
 #: above this certificate tolerance a certified λ can be far from any solution: at tol
 #: 1e-2 the speed-against-accuracy benchmark found certified λ off by up to 37 %
 LOOSE_TOL = 1e-6
@@ -50,9 +61,13 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     complementarity indices (default all: the EiCP).  all_solutions: enumerate every
     solution (small |J| only).  lam_min: only solutions with λ ≥ lam_min.  tol: relative
     certificate tolerance.  comm: split the enumeration across its ranks.  Other keywords
-    go to the method (``target``, ``nev``, ``max_iter``, ``options``...).  Every returned
-    solution passed its certificate; see :class:`EiCPResult` for the statuses.
+    go to the method (``target``, ``nev``, ``max_iter``, ``options``...; ``auto`` hands them
+    to every method it runs).  ``method="auto"`` runs the portfolio of :func:`auto_order`
+    and records each method's outcome in ``result.attempts``; ``result.method`` names the
+    one that answered.  Every returned solution passed its certificate; see
+    :class:`EiCPResult` for the statuses.
     """
+    check_options(tol=tol, lam_min=lam_min, **kwargs)
     if not 0.0 < tol < 1.0:
         raise ProblemError(f"tol must lie in (0, 1), got {tol!r}")
     if tol > LOOSE_TOL:
@@ -61,16 +76,85 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     problem = EiCPProblem.from_data(A, B, J)
     if all_solutions and method == "auto":
         method = "enumerate"
-    if method == "auto":
-        small = problem.J.size <= AUTO_ENUMERATE_J and problem.n <= AUTO_ENUMERATE_N and not problem.distributed
-        method = "enumerate" if small else "active-set"
-    if method not in SOLVERS:
+    if method != "auto" and method not in SOLVERS:
         raise SolverNotFound(method, available_methods())
     comm = mpi_comm(problem.A.getComm() if problem.distributed and comm is None else comm)
     t0 = time.perf_counter()
-    kw = dict(kwargs, tol=tol, lam_min=lam_min)
-    if method in ("enumerate", "active-set"):
-        kw["comm"] = comm
-    result = SOLVERS[method](problem, **kw)
+    kw = dict(kwargs, tol=tol, lam_min=lam_min, comm=comm)
+    result = _solve_auto(problem, kw) if method == "auto" else _run(method, problem, kw)
     result.timings["total"] = time.perf_counter() - t0
     return result
+
+
+def _run(method: str, problem: EiCPProblem, kw: dict) -> EiCPResult:
+    if method not in ("enumerate", "active-set"):  # serial methods: no communicator
+        kw = {k: v for k, v in kw.items() if k != "comm"}
+    return SOLVERS[method](problem, **kw)
+
+
+def auto_order(problem: EiCPProblem) -> list[str]:
+    """The methods ``auto`` tries, in order, for this problem.
+
+    ``enumerate`` when |J| ≤ AUTO_ENUMERATE_J and n ≤ AUTO_ENUMERATE_N (its answer, solutions
+    or a proof that there are none, is final); ``rayleigh`` when the pencil is serial,
+    n ≤ AUTO_RAYLEIGH_N and A, B are symmetric (it checks B SPD itself: a ProblemError is
+    recorded as ``not_applicable``); ``active-set``; ``semismooth`` unless the pencil is
+    distributed over several ranks (it is serial).
+    """
+    order = []
+    if problem.J.size <= AUTO_ENUMERATE_J and problem.n <= AUTO_ENUMERATE_N and not problem.distributed:
+        order.append("enumerate")
+    serial = not problem.distributed or problem.A.getComm().getSize() == 1
+    if serial and problem.n <= AUTO_RAYLEIGH_N and _symmetric_pair(problem):
+        order.append("rayleigh")
+    order.append("active-set")
+    if serial:
+        order.append("semismooth")
+    return order
+
+
+def _symmetric_pair(problem: EiCPProblem) -> bool:
+    if problem.distributed:  # on one rank here: PETSc's own test
+        a, b = problem.scales()
+        return bool(problem.A.isSymmetric(1e-12 * a) and problem.B.isSymmetric(1e-12 * b))
+    return is_symmetric(problem.A, 1e-12) and is_symmetric(problem.B, 1e-12)
+
+
+def _solve_auto(problem: EiCPProblem, kw: dict) -> EiCPResult:
+    """Run :func:`auto_order` until a method certifies a solution or the enumeration proves
+    there is none; the result is that method's, with ``attempts`` = every method run as
+    ``(method, status, message)``.  When none succeeds, the last result is returned with
+    every attempt's candidates, best residual first."""
+    attempts, candidates, result = [], [], None
+    for name in auto_order(problem):
+        run_kw = dict(kw)
+        if name == "semismooth" and "x0" not in kw:
+            run_kw.update(_best_start(problem, candidates, kw.get("lam_min")))
+        try:
+            result = _run(name, problem, run_kw)
+        except ProblemError as exc:  # this method does not apply here; the next may
+            attempts.append((name, "not_applicable", str(exc)))
+            continue
+        attempts.append((name, result.status, result.message))
+        if result.success or result.status == "no_solution":  # solved, or proved unsolvable
+            break
+        candidates.extend(result.candidates)
+    else:
+        if result is None:
+            result = EiCPResult(method="auto", status="no_method",
+                                message="no method applies: " + "; ".join(f"{a[0]}: {a[2]}" for a in attempts))
+        result.candidates = sorted(candidates, key=lambda c: c.residual)
+    result.attempts = attempts
+    return result
+
+
+def _best_start(problem: EiCPProblem, candidates: list, lam_min) -> dict:
+    """Semismooth's start: the candidate with the smallest certificate residual among those
+    it can start from (λ in the window, a positive entry on J); none: its default start."""
+    usable = [c for c in candidates
+              if np.all(np.isfinite(c.x)) and (lam_min is None or c.lam >= lam_min)
+              and (problem.J.size == 0 or np.maximum(c.x[problem.J], 0.0).sum() > 0)]
+    if not usable:
+        return {}
+    best = min(usable, key=lambda c: c.residual)
+    return {"x0": best.x, "lam0": best.lam}

@@ -64,8 +64,15 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from ..core.validation import as_matrix, scale, symmetry_error
+from ..core.validation import as_int, as_matrix, check_tol, scale, symmetry_error
 from .game import GameValue, game_value
+
+#: largest exact_limit accepted: the exact tests visit 2^n − 1 principal submatrices
+#: (n = 12 well under a second, doubling per n: n = 20 takes minutes)
+MAX_EXACT_LIMIT = 20
+
+#: largest dense_limit accepted: a dense copy of order 20000 is 3.2 GB
+MAX_DENSE_LIMIT = 20000
 
 #: the class attributes, in report order
 CLASS_NAMES = (
@@ -799,9 +806,17 @@ def classify(M, *, exact_limit: int = 12, tol: float = 1e-10, dense_limit: int =
     game_limit: the game value LP is solved up to this size (else ``game_value`` is None);
         a sparse LP with n = 3000 already takes seconds.
 
-    Raises :class:`~meicp.core.errors.ProblemError` for non-square, empty or non-finite M.
+    Raises :class:`~meicp.core.errors.ProblemError` for non-square, empty, complex or
+    non-finite M, for tol outside (0, 1e-2], for an ``exact_limit`` above
+    ``MAX_EXACT_LIMIT`` (2^n subsets: n = 24 takes hours), a ``dense_limit`` above
+    ``MAX_DENSE_LIMIT`` (memory) or negative limits.
     """
     t0 = time.perf_counter()
+    tol = check_tol(tol)
+    exact_limit = as_int(exact_limit, "exact_limit", minimum=0, maximum=MAX_EXACT_LIMIT)
+    dense_limit = as_int(dense_limit, "dense_limit", minimum=0, maximum=MAX_DENSE_LIMIT)
+    det_limit = as_int(det_limit, "det_limit", minimum=0)
+    game_limit = as_int(game_limit, "game_limit", minimum=0)
     M = as_matrix(M, "M")
     n = M.shape[0]
     s = scale(M)

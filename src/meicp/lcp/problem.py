@@ -2,10 +2,14 @@
 
 LCP(q, M): find ``x ≥ 0`` with ``w = Mx + q ≥ 0`` and ``xᵀw = 0`` (DESIGN §2).
 
-Certificate (relative, so that it means the same at any scale of the data): with
-``sx = max|x|`` and ``sw = max(max|q|, max|M|·max|x|)``,
+Certificate (relative, so that it means the same at any scale of the data, and row by row,
+so that it means the same whatever the scale of each row): with ``sx = max|x|`` and the
+row scales ``s_i = max(|q_i|, max_j |M_ij|·sx)``,
 
-    residual = max( max(0, -min x) / sx,  max(0, -min w) / sw,  max_i |x_i w_i| / (sx·sw) )
+    residual = max( max(0, -min x) / sx,  max_i max(0, -w_i) / s_i,  max_i |x_i w_i| / (sx·s_i) )
+
+(a row scaled by 1e-300 is held to the same relative standard as the others: with one
+global scale ``max|M|·max|x|`` its violations would pass whatever they are).
 
 It is recomputed from ``M`` and ``q`` by :func:`certify`, never taken from a solver's own
 bookkeeping; a result is ``solved`` only if ``residual ≤ tol``.
@@ -14,6 +18,7 @@ bookkeeping; a result is ``solved`` only if ``residual ≤ tol``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -22,7 +27,7 @@ import scipy.sparse.linalg as spla
 from ..core.results import SOLVED, Result
 from ..core.validation import as_matrix, as_vector
 from ..petsc.lcp import check_petsc_matrix
-from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, to_dense
+from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, row_max_abs, to_dense
 
 #: default relative certificate tolerance
 DEFAULT_TOL = 1e-10
@@ -60,9 +65,14 @@ class LCPProblem:
     def sparse(self) -> bool:
         return sp.issparse(self.M)
 
-    @property
+    @cached_property
     def matrix_scale(self) -> float:
         return max_abs_entry(self.M)
+
+    @cached_property
+    def row_scales(self) -> np.ndarray:
+        """``max_j |M_ij|`` per row (collective once for a PETSc Mat, then cached)."""
+        return row_max_abs(self.M)
 
     def dense(self) -> np.ndarray:
         return to_dense(self.M)
@@ -105,12 +115,13 @@ def relative_residual(problem: LCPProblem, x: np.ndarray) -> tuple[float, np.nda
     if not np.all(np.isfinite(w)):
         return float("inf"), w
     sx = float(np.max(np.abs(x))) if x.size else 0.0
-    sw = max(float(np.max(np.abs(problem.q))), problem.matrix_scale * sx)
+    sw = np.maximum(np.abs(problem.q), problem.row_scales * sx)
+    sw = np.where(sw > 0, sw, 1.0)  # a zero scale means w_i = 0 exactly
     sx = sx if sx > 0 else 1.0
-    sw = sw if sw > 0 else 1.0
-    r = max(0.0, -float(np.min(x)) / sx, -float(np.min(w)) / sw,
-            float(np.max(np.abs(x * w))) / (sx * sw))
-    return r, w
+    with np.errstate(over="ignore"):  # (x/sx)·(w/sw): x·w itself overflows at x ≈ 1e200
+        r = max(0.0, -float(np.min(x)) / sx, float(np.max(-w / sw)),
+                float(np.max(np.abs(x / sx) * np.abs(w / sw))))
+    return (r if np.isfinite(r) else float("inf")), w
 
 
 def certify(problem: LCPProblem, result: LCPResult, x, tol: float = DEFAULT_TOL,
@@ -125,7 +136,8 @@ def certify(problem: LCPProblem, result: LCPResult, x, tol: float = DEFAULT_TOL,
     r, w = relative_residual(problem, x)
     result.x, result.w, result.residual = x, w, r
     result.min_x, result.min_w = float(np.min(x)), float(np.min(w))
-    result.complementarity = abs(float(x @ w))
+    with np.errstate(over="ignore", invalid="ignore"):
+        result.complementarity = abs(float(x @ w))
     if r <= tol:
         result.status = SOLVED
         result.solutions = result.solutions or [x]

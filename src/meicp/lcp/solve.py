@@ -16,7 +16,7 @@ from __future__ import annotations
 import time
 
 from ..core.errors import ProblemError, SolverNotFound
-from ..core.validation import is_symmetric
+from ..core.validation import as_int, as_real, check_tol, is_symmetric
 from ..petsc import lcp as petsc_lcp
 from .enumeration import enumerate_lcp
 from .lemke import lemke
@@ -105,8 +105,11 @@ def solve_lcp(M, q, *, method: str = "auto", tol: float = DEFAULT_TOL, comm=None
     certificate tolerance (see :mod:`meicp.lcp.problem`).  Extra keywords go to the method
     (``max_iter``, ``omega``, ``snes_type``, ``tao_type``, ``options`` for PETSc options).
     Returns an :class:`LCPResult`; ``success`` only with a passing certificate.  Raises
-    :class:`ProblemError` on bad input and :class:`SolverNotFound` on an unknown method.
+    :class:`ProblemError` on bad input (including tol outside (0, 1), a non-integer
+    ``max_iter``, a non-finite ``omega``) and :class:`SolverNotFound` on an unknown method.
     """
+    tol = check_tol(tol)
+    kwargs = check_options(kwargs)
     problem = LCPProblem.from_data(M, q)
     if method == "auto":
         return _solve_auto(problem, tol=tol, comm=comm, **kwargs)
@@ -118,6 +121,19 @@ def solve_lcp(M, q, *, method: str = "auto", tol: float = DEFAULT_TOL, comm=None
     result = SOLVERS[method](problem, tol=tol, comm=comm, **kwargs)
     result.timings["total"] = time.perf_counter() - t0
     return result
+
+
+def check_options(kwargs: dict) -> dict:
+    """The numeric method options checked (ProblemError naming the one that is wrong)."""
+    out = dict(kwargs)
+    if out.get("max_iter") is not None:
+        out["max_iter"] = as_int(out["max_iter"], "max_iter", minimum=1)
+    if out.get("max_n") is not None:  # enumerate: 2^n supports, 2^26 already take hours
+        out["max_n"] = as_int(out["max_n"], "max_n", minimum=0, maximum=26)
+    for name in ("omega", "pivot_tol"):
+        if out.get(name) is not None:
+            out[name] = as_real(out[name], name)
+    return out
 
 
 def _solve_auto(problem: LCPProblem, *, tol: float, comm=None, **kwargs) -> LCPResult:

@@ -12,7 +12,12 @@ with the same paths so that a bare ``import petsc4py`` works there.
 from __future__ import annotations
 
 import glob
+import importlib.util
 import sys
+
+import numpy
+
+from ..core.environment import MissingDependency, describe, missing_line, numpy_mismatch
 
 _ARGV: list[str] = []
 
@@ -51,13 +56,34 @@ def init(argv: list[str] | None = None) -> None:
 
 def import_petsc():
     """Return the ``PETSc`` module, initialising PETSc and SLEPc with the options given to
-    :func:`init` (SLEPc is initialised with PETSc so that the order of first use is irrelevant)."""
+    :func:`init` (SLEPc is initialised with PETSc so that the order of first use is irrelevant).
+    Raises :class:`~meicp.core.environment.MissingDependency` when petsc4py or slepc4py is
+    missing or cannot be loaded with this NumPy."""
     if "petsc4py.PETSc" not in sys.modules:
         _ensure_on_path()
-        import slepc4py
-        slepc4py.init([sys.argv[0] if sys.argv else "meicp"] + _ARGV)
+        _check_bindings()
+        try:
+            import slepc4py
+            slepc4py.init([sys.argv[0] if sys.argv else "meicp"] + _ARGV)
+            from petsc4py import PETSc  # noqa: F401
+        except Exception as exc:  # noqa: BLE001 - a build mismatch raises more than ImportError
+            raise MissingDependency(describe([f"PETSc/SLEPc cannot be loaded: {type(exc).__name__}: "
+                                              f"{exc}"])) from exc
     from petsc4py import PETSc
     return PETSc
+
+
+def _check_bindings() -> None:
+    """Name a missing binding, or a NumPy that cannot load Debian's, before importing them
+    (NumPy 2 would print its own page of warnings and then fail inside petsc4py)."""
+    problems = [missing_line(m, ModuleNotFoundError(name=m))
+                for m in ("petsc4py", "slepc4py") if importlib.util.find_spec(m) is None]
+    spec = importlib.util.find_spec("petsc4py") if not problems else None
+    mismatch = numpy_mismatch(numpy.__version__, spec.origin if spec else None)
+    if mismatch:
+        problems.append(mismatch)
+    if problems:
+        raise MissingDependency(describe(problems))
 
 
 def import_slepc():

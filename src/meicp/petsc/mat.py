@@ -15,6 +15,7 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse as sp
 
+from ..core import validation
 from . import import_petsc
 from .comm import mpi_comm, to_petsc_comm
 
@@ -98,6 +99,18 @@ def mat_from_rows(comm, local_rows: sp.csr_matrix, shape: tuple[int, int], local
 
 def is_petsc_mat(M) -> bool:
     return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
+
+
+def row_max_abs(M) -> np.ndarray:
+    """``max_j |m_ij|`` for every row i, on every rank for a PETSc Mat (collective); NumPy and
+    SciPy matrices by :func:`meicp.core.validation.row_max_abs`."""
+    if not is_petsc_mat(M):
+        return validation.row_max_abs(M)
+    indptr, _, data = M.getValuesCSR()
+    local = np.zeros(len(indptr) - 1)
+    rows = np.repeat(np.arange(local.size), np.diff(indptr))
+    np.maximum.at(local, rows, np.abs(data))
+    return np.concatenate(M.getComm().tompi4py().allgather(local))
 
 
 def max_abs_entry(M) -> float:
