@@ -197,6 +197,25 @@ def test_scene_errors_name_the_key(change, words):
         scene_from_dict(change(copy.deepcopy(base_scene())), source="s.toml")
 
 
+@pytest.mark.parametrize("old, new, words", [
+    ("lattice.nx", "lattice.nxx", r"unknown key lattice\.nxx \(did you mean nx\? known here: nx, spacing"),
+    ("layers.0.stiffness", "layers.0.stifness", r"unknown key layers\[0\]\.stifness \(did you mean stiffness\?"),
+    ("lattice", "latice", r"unknown key latice \(did you mean lattice\?"),
+    ("contact.friction", "contact.mu", r"unknown key contact\.mu \(known here: friction, states\)"),
+])
+def test_a_misspelt_required_key_is_reported_as_unknown_first(old, new, words):
+    """`nxx = 5` was reported as "lattice.nx is required": unknown keys come first, with the
+    nearest known key, then missing ones."""
+    data = copy.deepcopy(base_scene())
+    *path, key = old.split(".")
+    table = data
+    for k in path:
+        table = table[int(k)] if k.isdigit() else table[k]
+    table[new.split(".")[-1]] = table.pop(key)
+    with pytest.raises(ProblemError, match=words):
+        scene_from_dict(data, source="s.toml")
+
+
 def test_top_displacement_needs_a_held_top():
     d = base_scene()
     d["boundary"]["top"] = "free"

@@ -4,7 +4,9 @@ A scene declares one layered lattice, its boundary conditions, its contacts and 
 solve it (the dataclasses are in :mod:`meicp.scene`; this module only parses and validates).  :func:`load_scene` reads a file, :func:`loads_scene` a string and
 :func:`scene_from_dict` an already parsed table.  Every key is checked: an unknown key, a
 value of the wrong type or out of range raises :class:`~meicp.core.errors.ProblemError`
-naming the key path (``layers[1].density``) before anything else happens.
+naming the key path (``layers[1].density``) before anything else happens.  Unknown keys
+are reported first, with the nearest known key (``lattice.nxx``: did you mean nx?), then
+missing ones.
 
 The whole schema, with defaults (``required`` = no default)::
 
@@ -81,6 +83,8 @@ of an embedded band) is described in :mod:`meicp.scene`.
 
 from __future__ import annotations
 
+import dataclasses
+import difflib
 import math
 import os
 import tomllib
@@ -134,16 +138,49 @@ def _fmt(value) -> str:
     return repr(value)
 
 
-class _Table:
-    """Reads the keys of one table, remembering its key path and which keys were used."""
+def _keys(cls, *skip: str) -> tuple[str, ...]:
+    """The TOML keys of a table: the fields of its :mod:`meicp.scene` dataclass, which are
+    named after them (``skip``: fields resolved at load time, not keys)."""
+    return tuple(f.name for f in dataclasses.fields(cls) if f.name not in skip)
 
-    def __init__(self, parser: "_SceneParser", data, path: str):
+
+#: the keys each table accepts, checked before any value is read (so that a misspelt
+#: required key is reported as the unknown key it is, not as the required one missing)
+KEYS = {
+    "": _keys(Scene, "source"),
+    "lattice": _keys(Lattice),
+    "layers": _keys(Layer),
+    "embedded": _keys(Embedded),
+    "boundary": _keys(Boundary),
+    "interfaces": _keys(Interface, "index", "declared"),
+    "contact": _keys(Contact),
+    "load": _keys(Load),
+    "solver": _keys(Solver),
+}
+
+
+class _Table:
+    """Reads the keys of one table, remembering its key path and which keys were used.
+
+    ``keys``: every key the table accepts.  Unknown keys are reported first (with the
+    nearest known one), before any missing or wrong value."""
+
+    def __init__(self, parser: "_SceneParser", data, path: str, keys: tuple[str, ...]):
         self.parser = parser
         self.path = path
         if not isinstance(data, Mapping):
             parser.fail(path, f"must be a table, got {type(data).__name__} {_fmt(data)}")
         self.data = data
+        self.keys = keys
         self.used: set[str] = set()
+        for name in data:
+            if name not in keys:
+                self._unknown(name)
+
+    def _unknown(self, name) -> None:
+        near = difflib.get_close_matches(str(name), self.keys, n=1)
+        hint = f"did you mean {near[0]}? " if near else ""
+        self.parser.fail(self.key(name), f"({hint}known here: {', '.join(self.keys)})", prefix="unknown key ")
 
     def key(self, name: str) -> str:
         return f"{self.path}.{name}" if self.path else name
@@ -191,11 +228,10 @@ class _Table:
         return value
 
     def done(self) -> None:
-        unknown = [k for k in self.data if k not in self.used]
-        if unknown:
-            known = ", ".join(sorted(self.used)) or "none"
-            self.parser.fail(self.key(unknown[0]), f"is not a known key (known here: {known})",
-                             prefix="unknown key ")
+        """Every key given was read (a key in ``keys`` that the parser never reads is a bug)."""
+        unread = [k for k in self.data if k not in self.used]
+        if unread:
+            self._unknown(unread[0])
 
 
 class _SceneParser:
@@ -242,7 +278,7 @@ class _SceneParser:
 
     # ---------------------------------------------------------------- the whole scene
     def parse(self, data) -> Scene:
-        top = _Table(self, data, "")
+        top = _Table(self, data, "", KEYS[""])
         title = top.string("title", "")
         lattice = self.lattice(top.raw("lattice"))
         top.used.update({"layers", "embedded", "interfaces"})
@@ -273,7 +309,7 @@ class _SceneParser:
                      load=load, solver=solver, petsc=petsc, title=title, source=self.source)
 
     def lattice(self, data) -> Lattice:
-        t = _Table(self, data, "lattice")
+        t = _Table(self, data, "lattice", KEYS["lattice"])
         nx = t.integer("nx", minimum=2)
         spacing = t.number("spacing", 1.0, positive=True)
         shear = t.number("shear", 0.0)
@@ -294,7 +330,7 @@ class _SceneParser:
             self.fail("layers", "must have at least one [[layers]] table")
         layers, names = [], set()
         for k, entry in enumerate(entries):
-            t = _Table(self, entry, f"layers[{k}]")
+            t = _Table(self, entry, f"layers[{k}]", KEYS["layers"])
             name = t.string("name")
             if not name:
                 self.fail(t.key("name"), "must not be empty")
@@ -313,7 +349,7 @@ class _SceneParser:
         by_name = {layer.name: layer for layer in layers}
         out, names, boxes = [], set(by_name), []
         for k, entry in enumerate(entries):
-            t = _Table(self, entry, f"embedded[{k}]")
+            t = _Table(self, entry, f"embedded[{k}]", KEYS["embedded"])
             name = t.string("name")
             if not name:
                 self.fail(t.key("name"), "must not be empty")
@@ -356,7 +392,7 @@ class _SceneParser:
         index = {layer.name: k for k, layer in enumerate(layers)}
         declared: dict[int, Interface] = {}
         for k, entry in enumerate(entries):
-            t = _Table(self, entry, f"interfaces[{k}]")
+            t = _Table(self, entry, f"interfaces[{k}]", KEYS["interfaces"])
             below = t.string("below")
             if below not in index:
                 self.fail(t.key("below"), f"must name a layer ({', '.join(map(repr, index))}), got {below!r}")
@@ -392,7 +428,7 @@ class _SceneParser:
         return out
 
     def boundary(self, data) -> Boundary:
-        t = _Table(self, data, "boundary")
+        t = _Table(self, data, "boundary", KEYS["boundary"])
         values = {}
         for side in SIDES:
             choices = BOUNDARY_KINDS + ((CONTACT,) if side == "bottom" else ())
@@ -401,14 +437,14 @@ class _SceneParser:
         return Boundary(**values)
 
     def contact(self, data, lattice) -> Contact:
-        t = _Table(self, data, "contact")
+        t = _Table(self, data, "contact", KEYS["contact"])
         friction = t.number("friction", nonnegative=True)
         states = self.states("contact.states", t.raw("states", SOLVE), lattice.nx)
         t.done()
         return Contact(friction=friction, states=states)
 
     def load(self, data, boundary) -> Load:
-        t = _Table(self, data, "load")
+        t = _Table(self, data, "load", KEYS["load"])
         top = t.raw("top_displacement", None)
         if top is not None:
             if not isinstance(top, list) or len(top) != 2:
@@ -433,7 +469,7 @@ class _SceneParser:
         return Load(top_displacement=top, gravity=gravity, side_displacement=side)
 
     def solver(self, data) -> Solver:
-        t = _Table(self, data, "solver")
+        t = _Table(self, data, "solver", KEYS["solver"])
         method = t.string("method", "auto")
         if not method:
             self.fail("solver.method", "must not be empty")
