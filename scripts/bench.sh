@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# make bench [MODE=quick|full]: every benchmark, then its charts (DESIGN §7).
+# make bench [MODE=quick|full]: every benchmark, then its charts (docs/benchmarks.md).
 #   quick  small sizes, one repeat, < 10 min; CSVs and PNGs in build/benchmarks/ (not committed)
 #   full   the sizes quoted in docs/benchmarks.md; CSVs and PNGs in docs/benchmarks/ (committed)
 # MEICP_BENCH_DIR overrides the output directory; BENCH_ONLY="tradeoff scaling" runs a subset.

@@ -65,7 +65,7 @@ from meicp.lcp.siconos import siconos_solve
 FIELDS = ["sweep", "problem", "param", "method", "settings", "ranks", "wall_s", "iterations", "status",
           "outcome", "error", "reference", "answer", "residual", "classes", "detail"]
 
-MU_C = 1.90603249  # two_layers.toml, DESIGN check value (also recomputed by bisection below)
+MU_C = 1.90603249  # two_layers.toml, data/scenes/README.md's value (also recomputed by bisection below)
 EIG_METHODS = ("enumerate", "active-set", "rayleigh", "semismooth")
 LCP_METHODS = ("lemke", "enumerate", "pgs", "newton", "tao", "auto")
 SICONOS = ("lemke", "enum", "newton-fb", "pgs")

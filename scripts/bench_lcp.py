@@ -2,7 +2,7 @@
 """LCP benchmark: meicp's methods against Siconos (Lemke, enumeration, Newton-FB, PGS).
 
 Families:
-- ``siconos``: the Siconos test set in ``../shared/data/siconos-lcp`` (dense, n ≤ 40);
+- ``siconos``: the Siconos test set vendored in ``tests/data/siconos-lcp`` (dense, n ≤ 40);
 - ``condensed``: dense SPD contact-like LCPs — a 2-D grid Laplacian condensed (Schur
   complement) onto its bottom row, the contact DOFs; q pushes half the contacts in;
 - ``laplacian``: sparse SPD 2-D Laplacian + 0.05 I with random q, n = 10² … 10⁵;
@@ -87,7 +87,7 @@ def serial_runs(args):
     rows = []
     problems = []
     if "siconos" in args.families:
-        for path in sorted((ROOT.parent / "shared" / "data" / "siconos-lcp").glob("*.dat")):
+        for path in sorted((ROOT / "tests" / "data" / "siconos-lcp").glob("*.dat")):
             M, q, _ = read_siconos_lcp(path)
             problems.append(("siconos", path.stem, M, q))
     if "condensed" in args.families:

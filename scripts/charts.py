@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Charts from the benchmark CSVs (DESIGN §7).  One function ``chart_NAME`` per benchmark
+"""Charts from the benchmark CSVs (docs/benchmarks.md).  One function ``chart_NAME`` per benchmark
 ``scripts/bench_NAME.py``; it reads ``NAME.csv`` and writes its PNGs beside it:
 
     .venv/bin/python scripts/charts.py lcp docs/benchmarks/lcp.csv

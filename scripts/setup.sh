@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Idempotent set-up on Debian bookworm (DESIGN §6): Debian's PETSc/SLEPc/MPI/h5py stack,
+# Idempotent set-up on Debian bookworm (docs/design.md §11): Debian's PETSc/SLEPc/MPI/h5py stack,
 # a venv that sees them, and the project installed editable.  Run as root (or with sudo).
 # A second run with everything present touches nothing and takes a few seconds.
 set -euo pipefail

@@ -1,6 +1,7 @@
 """The vendored reference sets: every file tests/data/README.md lists is present and
 unchanged, nothing unlisted was added, each set keeps its licence, and no test module
-reads data from outside the repository."""
+reads data from outside the repository (nor does a script, nor does any docstring cite notes
+the repository does not carry)."""
 
 import hashlib
 import re
@@ -24,9 +25,22 @@ def test_nothing_unlisted_and_each_set_keeps_its_licence():
     assert "MIT License" in (DATA / "eicp-niu" / "LICENSE").read_text()
 
 
-def test_no_test_reads_beside_the_repository():
-    for path in (ROOT / "tests").glob("*.py"):
-        if path.name == "test_data.py":  # this file names the patterns it looks for
-            continue
+def _sources():
+    """Every test module, script and source file, except this one (it names the patterns)."""
+    for pattern in ("tests/*.py", "scripts/*.py", "scripts/*.sh", "src/meicp/**/*.py"):
+        for path in sorted(ROOT.glob(pattern)):
+            if path.name != "test_data.py":
+                yield path
+
+
+def test_no_test_or_script_reads_beside_the_repository():
+    for path in _sources():
         text = path.read_text()
         assert "ROOT.parent" not in text and "../shared" not in text, path.name
+
+
+def test_citations_name_the_notes_the_repository_carries():
+    """The code cited "DESIGN §…", a file outside the repository: docs/design.md replaces it."""
+    for path in _sources():
+        assert "DESIGN" not in path.read_text(), path.relative_to(ROOT)
+    assert (ROOT / "docs" / "design.md").is_file()

@@ -34,7 +34,7 @@ from .conftest import ROOT, meicp_cmd, run
 M3 = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
 Q3 = np.array([-2.0, 4.0, -4.0])
 X3 = np.array([1.0, 0.0, 2.0])
-#: DESIGN §3: EiCP(A, I) has exactly the three eigenvalues −1, −2, −(3 + √5)/2
+#: docs/design.md §4.4: EiCP(A, I) has exactly the three eigenvalues −1, −2, −(3 + √5)/2
 A2 = -np.array([[1.0, 1.0], [1.0, 2.0]])
 LAMS2 = np.array([-1.0, -2.0, -(3 + 5 ** 0.5) / 2])
 

@@ -1,8 +1,8 @@
 """meicp: stability of layered elastic lattices in frictional contact.
 
 Mixed eigenvalue complementarity problems (MEiCP) and linear complementarity problems
-(LCP) on distributed PETSc matrices with SLEPc eigensolvers.  See ``DESIGN.md`` in the
-shared notes and the README for the public API.
+(LCP) on distributed PETSc matrices with SLEPc eigensolvers.  See ``docs/design.md`` and
+the README for the public API.
 """
 
 __version__ = "0.1.0"

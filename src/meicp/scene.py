@@ -1,5 +1,5 @@
 """The scene: one layered lattice, its boundary conditions, contacts, load and solver
-settings, as frozen dataclasses (DESIGN §5).  The vocabulary every package shares — the
+settings, as frozen dataclasses (docs/design.md §10).  The vocabulary every package shares — the
 lattice is built from it, the contact analysis reads its states, the results record it —
 so it depends on nothing but :mod:`meicp.core`.
 
@@ -25,7 +25,7 @@ from typing import Any
 BOUNDARY_KINDS = ("free", "fixed", "fixed_x", "fixed_y")
 CONTACT = "contact"
 SIDES = ("top", "bottom", "left", "right")
-#: contact node states (DESIGN §4), and "solve" = find them from the static LCP
+#: contact node states (docs/design.md §6.3, §7.1), and "solve" = find them from the static LCP
 STATES = ("stick", "slip+", "slip-", "separated", "grazing")
 SOLVE = "solve"
 INTERFACE_KINDS = ("bonded", "frictional")
@@ -133,7 +133,7 @@ class Interface:
 
     ``kind`` is ``bonded`` (bonds with ``stiffness`` cross it) or ``frictional`` (no bonds;
     the top row of the lower layer and the bottom row of the upper layer are in Coulomb
-    contact with coefficient ``friction``, node states ``states``, DESIGN §4 (b)).
+    contact with coefficient ``friction``, node states ``states``, docs/design.md §6.1 (b)).
     ``declared`` tells whether the scene file has an entry for it.
     """
 

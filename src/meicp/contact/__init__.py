@@ -1,5 +1,5 @@
 """Contact: states (prescribed or from the static frictional equilibrium), the MEiCP maps and
-pencil, the instability analysis and the critical friction (DESIGN §4).
+pencil, the instability analysis and the critical friction (docs/design.md §6–§8).
 
 Modules, from the bottom up: ``maps`` (states → Q̃, P̃), ``static`` (the static
 equilibrium, a package), ``problem`` (a scene → its pencil A = −P̃KQ̃, B = P̃MQ̃:

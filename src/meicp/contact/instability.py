@@ -1,4 +1,4 @@
-"""The instability analysis end to end (seed 000 §III, DESIGN §4): ``meicp.analyze``.
+"""The instability analysis end to end (seed 000 §III, docs/design.md §7–§8): ``meicp.analyze``.
 
 1. Lattice: K and M (distributed when ``comm`` has several ranks).
 2. Contact states: prescribed by the scene, or from the static frictional equilibrium

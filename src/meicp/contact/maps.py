@@ -1,4 +1,4 @@
-"""From contact states to the MEiCP's maps (DESIGN §4): which DOFs stay, which pair up.
+"""From contact states to the MEiCP's maps (docs/design.md §7.1–§7.2): which DOFs stay, which pair up.
 
 For every contact (a base node, or a frictional interface pair in relative coordinates
 ``d = u_upper − u_lower``) the state decides its two DOFs (t = x, n = y):

@@ -1,4 +1,4 @@
-"""The MEiCP of a scene in its contact states (seed 000 §III, DESIGN §4):
+"""The MEiCP of a scene in its contact states (seed 000 §III, docs/design.md §7.2):
 :func:`pencil` gives ``A = −P̃ K Q̃``, ``B = P̃ M Q̃``, the complementarity set J and the maps,
 for the instability analysis, the critical friction, tests and benchmark scripts alike.
 

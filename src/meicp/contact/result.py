@@ -1,4 +1,4 @@
-"""What :func:`meicp.analyze` returns (DESIGN §5): divergence modes, stability verdict and
+"""What :func:`meicp.analyze` returns (docs/design.md §10.2): divergence modes, stability verdict and
 its evidence, contact states, timings; and the summary table ``meicp solve`` prints."""
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ class InstabilityResult(Result):
 
 
 def states_compact(states) -> str:
-    """``slip+ ×12, stick ×3`` (in the order of DESIGN §4's table); "unknown" when empty."""
+    """``slip+ ×12, stick ×3`` (in the order of docs/design.md §7.1's table); "unknown" when empty."""
     if not states:
         return "unknown"
     counts = Counter(states)

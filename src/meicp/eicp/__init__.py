@@ -1,4 +1,4 @@
-"""Eigenvalue complementarity problems, EiCP and mixed MEiCP (DESIGN §3)."""
+"""Eigenvalue complementarity problems, EiCP and mixed MEiCP (docs/design.md §4)."""
 
 from .problem import EiCPProblem, EiCPResult, EiCPSolution
 from .solve import available_methods, solve_eicp

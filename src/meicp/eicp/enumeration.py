@@ -1,4 +1,4 @@
-"""All solutions of a small (M)EiCP by support enumeration (DESIGN §3).
+"""All solutions of a small (M)EiCP by support enumeration (docs/design.md §4.2).
 
 λ is a solution iff for some support ``S ⊆ J`` the reduced pencil on ``R = F ∪ S`` has
 ``A_RR ξ = λ B_RR ξ`` with ``ξ_S > 0`` and dual feasibility ``(λB − A)_{J∖S, R} ξ ≥ 0``.

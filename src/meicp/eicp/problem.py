@@ -1,6 +1,6 @@
 """The (mixed) eigenvalue complementarity problem, its solutions and their certificates.
 
-Convention (DESIGN §3, seed 000 (2)-(3)): find λ ∈ ℝ and x ≠ 0 with
+Convention (docs/design.md §4.1, seed 000 (2)-(3)): find λ ∈ ℝ and x ≠ 0 with
 
     w = (λB − A)x,   x_J ≥ 0,  w_J ≥ 0,  x_Jᵀw_J = 0,   w_F = 0   (F = complement of J).
 

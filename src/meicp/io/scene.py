@@ -1,4 +1,4 @@
-"""Scene files: TOML (DESIGN §5) parsed and checked into a :class:`~meicp.scene.Scene`.
+"""Scene files: TOML (docs/design.md §10.1) parsed and checked into a :class:`~meicp.scene.Scene`.
 
 A scene declares one layered lattice, its boundary conditions, its contacts and how to
 solve it (the dataclasses are in :mod:`meicp.scene`; this module only parses and validates).  :func:`load_scene` reads a file, :func:`loads_scene` a string and

@@ -7,8 +7,8 @@ column order, so row lengths are known before any value is computed and the CSR 
 are allocated once, exactly, and filled in place.  No COO, no per-entry Python loop, and
 the temporaries are bounded by the chunk size (about 2^16 nodes), not by the lattice.
 
-Element matrix of a bond of stiffness ``k`` and unit direction ``e`` (DESIGN §4, errata of
-seed 000 applied): ``k [[A, −A], [−A, A]]`` with ``A = e eᵀ``, each bond with its own
+Element matrix of a bond of stiffness ``k`` and unit direction ``e`` (docs/design.md §5, errata
+of seed 000 in §12 applied): ``k [[A, −A], [−A, A]]`` with ``A = e eᵀ``, each bond with its own
 direction.  Mass: ``ρ a³`` on both DOFs of every node.
 
 Serial and plain SciPy: :func:`assemble_scipy` gives CSR matrices.  The distributed PETSc

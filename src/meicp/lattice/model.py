@@ -1,4 +1,4 @@
-"""The layered lattice of DESIGN §4 as plain arrays: geometry, materials, bonds' stiffness
+"""The layered lattice of docs/design.md §5 as plain arrays: geometry, materials, bonds' stiffness
 rules and boundary DOFs.  No PETSc here.
 
 Nodes ``(i, j)``, ``i = 0..nx-1`` left to right, ``j = 0..ny-1`` bottom to top, node number
@@ -143,7 +143,7 @@ class LatticeModel:
         return np.array([a * (di + self.shear * dj), a * dj], dtype=float)
 
     def bond_matrix(self, di: int, dj: int) -> np.ndarray:
-        """``A = e eᵀ`` of the bond direction ``e`` (DESIGN §4)."""
+        """``A = e eᵀ`` of the bond direction ``e`` (docs/design.md §5)."""
         d = self.bond_vector(di, dj)
         e = d / np.linalg.norm(d)
         return np.outer(e, e)

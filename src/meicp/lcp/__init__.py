@@ -1,4 +1,4 @@
-"""Linear complementarity problems: solvers, matrix classes and game value (DESIGN §2)."""
+"""Linear complementarity problems: solvers, matrix classes and game value (docs/design.md §2–§3)."""
 
 from .problem import LCPProblem, LCPResult
 from .solve import available_methods, solve_lcp

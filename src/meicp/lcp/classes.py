@@ -1,6 +1,6 @@
 """Which LCP matrix classes a square matrix belongs to, and what that guarantees.
 
-Seed 002 §3–§7 (DESIGN §2): before solving ``LCP(q, M)`` — find ``x ≥ 0`` with
+Seed 002 §3–§7 (docs/design.md §3): before solving ``LCP(q, M)`` — find ``x ≥ 0`` with
 ``w = Mx + q ≥ 0`` and ``xᵀw = 0`` — classify ``M``; the classes say whether a solution
 exists for every load (Q), is unique for every load (P), whether the unloaded problem has
 spurious nonzero solutions (not R0), and so on.  :func:`classify` answers each class with

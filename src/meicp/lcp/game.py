@@ -1,4 +1,5 @@
-"""The value of the zero-sum matrix game with payoff ``M`` (seed 002 §4, DESIGN §1 erratum).
+"""The value of the zero-sum matrix game with payoff ``M`` (seed 002 §4, docs/design.md §3.2; the
+seed's erratum in §12).
 
 Convention (seed 002 eq. (17)): the row player ("the structure") picks ``x`` in the
 simplex Δ to *minimise* ``xᵀMy``, the column player ("the environment") picks ``y`` in Δ

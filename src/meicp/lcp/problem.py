@@ -1,6 +1,6 @@
 """The LCP, its result and its certificate.
 
-LCP(q, M): find ``x ≥ 0`` with ``w = Mx + q ≥ 0`` and ``xᵀw = 0`` (DESIGN §2).
+LCP(q, M): find ``x ≥ 0`` with ``w = Mx + q ≥ 0`` and ``xᵀw = 0`` (docs/design.md §2.1).
 
 Certificate (relative, so that it means the same at any scale of the data, and row by row,
 so that it means the same whatever the scale of each row): with ``sx = max|x|`` and the

@@ -1,7 +1,7 @@
 """The PETSc/SLEPc layer: the only place that imports petsc4py and slepc4py.
 
 Debian installs petsc4py/slepc4py under ``/usr/lib/petscdir/...`` and ``/usr/lib/slepcdir/...``
-rather than on the default ``sys.path`` (DESIGN §6).  :func:`import_petsc` finds them, so
+rather than on the default ``sys.path`` (docs/design.md §11).  :func:`import_petsc` finds them, so
 users need no ``PETSC_DIR``; ``make setup`` also writes a ``.pth`` file into the venv
 with the same paths so that a bare ``import petsc4py`` works there.
 

@@ -8,7 +8,7 @@ solutions with ``x_J ≠ 0``), and ``g = ½(xᵀBx − 1)`` when J = ∅ (a gene
 
 Jacobian ``[[λB − A, Bx], [∇gᵀ, 0]]``: an AIJ matrix created once on the union pattern of
 A, B, the diagonal and a dense last row and column, and *refilled completely* in every
-Jacobian callback, because ``vinewtonssls`` overwrites it in place (DESIGN §6).  The bordered
+Jacobian callback, because ``vinewtonssls`` overwrites it in place (docs/design.md §11).  The bordered
 matrix is indefinite with a zero diagonal entry, so the linear solves are MUMPS LU (PETSc's
 own LU does not pivot).  Options live under ``-meicp_eicp_vi_`` and the command line wins.
 
@@ -18,7 +18,7 @@ override with ``-meicp_eicp_vi_snes_linesearch_type``.
 
 Serial: the Mat lives on ``COMM_SELF`` (inputs are NumPy / SciPy).  This is a local Newton
 method — converging or not depends on the start; callers must check the certificate, since
-``vinewtonrsls`` can stop at a bad iterate at very tight ``snes_atol`` (DESIGN §6).
+``vinewtonrsls`` can stop at a bad iterate at very tight ``snes_atol`` (docs/design.md §11).
 """
 
 from __future__ import annotations

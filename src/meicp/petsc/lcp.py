@@ -2,7 +2,7 @@
 
 ``newton``: F(x) = Mx + q with bounds 0 ≤ x ≤ ∞ solved by ``vinewtonrsls`` (default) or
 ``vinewtonssls``; the Jacobian is M, refilled at each callback because ``vinewtonssls``
-modifies it in place (DESIGN §6).  Linear solves by MUMPS LU (PETSc's own LU does not
+modifies it in place (docs/design.md §11).  Linear solves by MUMPS LU (PETSc's own LU does not
 pivot).  Any M; convergence is local, so the certificate decides.
 
 ``tao``: for symmetric M the LCP is the bound-constrained QP min ½xᵀMx + qᵀx, x ≥ 0, whose
@@ -108,7 +108,7 @@ def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defau
     J: a PETSc Mat or a SciPy matrix (every rank holds it; distributed with
     :func:`mat_from_scipy` over ``comm``); q, lower, upper, x0: full-length arrays on every rank
     (±inf for no bound).  The Jacobian is copied back from J in every callback
-    (``vinewtonssls`` overwrites it, DESIGN §6).  Options ``defaults`` < ``options`` < command
+    (``vinewtonssls`` overwrites it, docs/design.md §11).  Options ``defaults`` < ``options`` < command
     line under ``prefix``.  Returns ``(z, iterations, reason_str, seconds, snes_type)`` with z
     gathered on every rank; a PETSc error inside the solve becomes ``reason_str = "PETSC_ERROR: ..."``.
     Collective.

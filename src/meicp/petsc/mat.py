@@ -1,7 +1,7 @@
 """Matrices as the solvers meet them: NumPy, SciPy sparse, or a distributed PETSc Mat.
 
 Distributed matrices are built from per-rank CSR rows: each rank's rows with NumPy/SciPy
-handed to ``createAIJ(csr=...)`` (DESIGN §6: a Python ``setValues`` loop is 40× slower),
+handed to ``createAIJ(csr=...)`` (docs/design.md §11: a Python ``setValues`` loop is 40× slower),
 and gathered back into SciPy.  :func:`is_petsc_mat`, :func:`max_abs_entry`,
 :func:`to_dense` and :func:`matvec` take any of the three kinds: one dispatch for the few
 operations every problem class needs.  Collective on the matrix's (or ``comm``'s)

@@ -138,7 +138,7 @@ def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 6000
 
 # --------------------------------------------------------------------------- mode shapes
 
-#: contact states (DESIGN §4): marker, colour and legend label used by every plot
+#: contact states (docs/design.md §7.1): marker, colour and legend label used by every plot
 STATE_STYLE = {
     "stick": ("s", "tab:blue", "stick"),
     "slip+": (">", "tab:red", "slip+ (impending slip in +x)"),

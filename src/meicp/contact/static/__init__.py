@@ -1,4 +1,4 @@
-"""Static frictional equilibrium: the contact states behind ``states = "solve"`` (DESIGN §4,
+"""Static frictional equilibrium: the contact states behind ``states = "solve"`` (docs/design.md §6.3,
 seed 002 §2).  The formulations, sign conventions and tolerances are derived in
 ``docs/static-equilibrium.md``; the modules follow its sections (``data``, ``condensed``,
 ``mixed``, ``states``), ``solve`` dispatches and ``result`` is what comes back."""
