@@ -11,6 +11,10 @@
    its largest eigenvalue is negative: the Rayleigh-quotient bound, by LDLᵀ inertia).
 4. Modes back in natural numbering: ``u = Q̃ x``.
 
+A scene without contact has no frictional instability to decide: it gets a modal analysis
+instead, its lowest vibration modes (:mod:`meicp.contact.modal`).  Each phase runs in its
+PETSc log stage (``-log_view``: static, assemble, reduce, eigen).
+
 The verdict logic lives here; the PETSc side (distributed pencil, inertia) in
 :mod:`meicp.petsc`.  The critical friction is :mod:`meicp.contact.critical_friction`.
 """
@@ -30,8 +34,10 @@ from ..petsc.assembly import assemble
 from ..petsc.comm import mpi_comm
 from ..petsc.inertia import eigenvalues_at_or_above
 from ..petsc.mat import destroying, max_abs_entry
+from ..petsc.stages import stage
 from ..scene import Scene
 from .maps import grazing_cases
+from .modal import has_contact, modal_analysis
 from .problem import Pencil, contact_states, pencil_of
 from .result import InstabilityResult, Mode
 
@@ -67,12 +73,13 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
                            "(meicp.analyze also reads a scene file)")
     comm = mpi_comm(comm)
     model = LatticeModel(scene)
-    if model.boundary.bottom != "contact" and not any(i.kind == "frictional" for i in scene.interfaces):
-        raise ProblemError("the scene has no contact: set boundary.bottom = \"contact\" or a frictional interface")
+    if not has_contact(scene):  # no friction: no instability to decide, its vibration modes instead
+        return modal_analysis(scene, model, comm, nev=solver_options.get("nev"), options=solver_options.get("options"))
     result = InstabilityResult()
     # -- states ---------------------------------------------------------------------------
     t0 = time.perf_counter()
-    sets, static = contact_states(scene, model, comm)
+    with stage("static"):
+        sets, static = contact_states(scene, model, comm)
     if static is not None:
         timings["static"] = time.perf_counter() - t0
         result.static = static
@@ -84,7 +91,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     result.interface_states = {cs.name: list(cs.states) for cs in sets if cs.name != "base"}
     # -- lattice --------------------------------------------------------------------------
     t0 = time.perf_counter()
-    K, M = assemble(model, comm)  # PETSc (row bands) when distributed, else SciPy
+    with stage("assemble"):
+        K, M = assemble(model, comm)  # PETSc (row bands) when distributed, else SciPy
     timings["assemble"] = time.perf_counter() - t0
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
     # -- one MEiCP per grazing case -------------------------------------------------------
@@ -93,7 +101,9 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     with destroying(K, M):
         for case in grazing_cases(sets):
             t0 = time.perf_counter()
-            with pencil_of(K, M, model, sets, case, static) as pen:
+            with stage("reduce"):
+                pen = pencil_of(K, M, model, sets, case, static)
+            with pen:
                 red = pen.maps
                 timings["reduce"] = timings.get("reduce", 0.0) + time.perf_counter() - t0
                 result.sizes = {"dofs": model.n_dofs, "retained": int(red.retained.size),
@@ -106,7 +116,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
                     eicps.append(None)
                     continue
                 t0 = time.perf_counter()
-                modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, solver_options)
+                with stage("eigen"):
+                    modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
             modes += modes_c
             evidences.append(evidence)

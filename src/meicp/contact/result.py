@@ -18,11 +18,15 @@ GLYPHS = dict(zip(STATES, "|><o~"))
 STRIP_MAX = 100
 #: modes listed in a summary
 SUMMARY_MODES = 10
+#: the verdict of a scene without contact (:mod:`meicp.contact.modal`)
+MODAL_VERDICT = "NO CONTACT: modal analysis"
 
 
 @dataclass
 class Mode:
-    """One divergence mode: σ = λ² ≥ 0 and its growth rate λ = √σ.
+    """One divergence mode: σ = λ² ≥ 0 and its growth rate λ = √σ; or, in the modal
+    analysis of a scene without contact, one vibration mode: σ = −ω² ≤ 0 and its angular
+    frequency ω = √−σ (support empty).
 
     x: the mode shape in natural DOF numbering (length 2·nx·ny; fixed and sticking DOFs 0,
     relative displacements of frictional interfaces added back to the upper layer),
@@ -41,12 +45,20 @@ class Mode:
     def growth_rate(self) -> float:
         return float(np.sqrt(max(self.sigma, 0.0)))
 
+    @property
+    def frequency(self) -> float:
+        """Angular frequency ω = √−σ of an oscillating mode (σ < 0); 0 for σ ≥ 0."""
+        return float(np.sqrt(max(-self.sigma, 0.0)))
+
 
 @dataclass
 class InstabilityResult(Result):
     """Result of :func:`meicp.analyze`.
 
-    modes: certified divergence modes, fastest (largest σ) first.
+    analysis: ``"instability"`` (a scene with contact: the divergence verdict) or
+        ``"modal"`` (no contact: the lowest vibration modes, :mod:`meicp.contact.modal`).
+    modes: certified divergence modes, fastest (largest σ) first; in a modal analysis the
+        vibration modes (σ = −ω² ≤ 0), lowest frequency first.
     stable: True when no σ ≥ 0 solution exists and that is proved (``evidence`` says how);
         False when a certified mode exists; None when the search was inconclusive.
     evidence: one sentence on what was searched and what it proves.
@@ -59,6 +71,7 @@ class InstabilityResult(Result):
     sizes: DOF counts (all, retained, complementarity).
     """
 
+    analysis: str = "instability"
     modes: list = field(default_factory=list)
     stable: bool | None = None
     evidence: str = ""
@@ -69,13 +82,24 @@ class InstabilityResult(Result):
     sizes: dict = field(default_factory=dict)
 
     @property
+    def modal(self) -> bool:
+        return self.analysis == "modal"
+
+    @property
     def verdict(self) -> str:
-        """STABLE, UNSTABLE or UNDECIDED (the verdict alone, whatever ``status``)."""
+        """STABLE, UNSTABLE or UNDECIDED (the verdict alone, whatever ``status``); NO CONTACT
+        for a modal analysis (no friction, hence no frictional instability)."""
+        if self.modal:
+            return MODAL_VERDICT
         return {True: "STABLE", False: "UNSTABLE"}.get(self.stable, "UNDECIDED")
 
     def summary(self) -> str:
         lines = [f"{self.verdict}: {self.evidence}"]
         for k, m in enumerate(self.modes[:SUMMARY_MODES]):
+            if self.modal:
+                lines.append(f"  mode {k}: σ = {m.sigma:.10g}, angular frequency ω = {m.frequency:.6g}, "
+                             f"residual {m.residual:.1e}")
+                continue
             lines.append(f"  mode {k}: σ = {m.sigma:.10g}, growth rate λ = {m.growth_rate:.6g}, "
                          f"slipping nodes {m.support.tolist()}, residual {m.residual:.1e}")
         if len(self.modes) > SUMMARY_MODES:
@@ -107,7 +131,16 @@ class InstabilityResult(Result):
             rows.append(("evidence", self.evidence))
         if self.message and self.message != self.evidence:
             rows.append(("message", self.message))
-        if self.modes:
+        if self.modes and self.modal:
+            n = len(self.modes)
+            rows.append(("modes", f"{n} certified vibration mode{'s' if n != 1 else ''} (σ = −ω², lowest "
+                                  f"frequency first)"))
+            rows.append(("", f"  {'#':>3}  {'σ':>14}  {'frequency ω':>14}  {'residual':>9}"))
+            for k, m in enumerate(self.modes[:SUMMARY_MODES]):
+                rows.append(("", f"  {k:>3}  {m.sigma:>14.8g}  {m.frequency:>14.8g}  {m.residual:>9.1e}"))
+            if n > SUMMARY_MODES:
+                rows.append(("", f"  ... {n - SUMMARY_MODES} more (all in results.h5)"))
+        elif self.modes:
             n = len(self.modes)
             rows.append(("modes", f"{n} certified divergence mode{'s' if n != 1 else ''} (σ = λ², fastest first)"))
             rows.append(("", f"  {'#':>3}  {'σ':>14}  {'growth rate λ':>14}  {'support':>8}  {'residual':>9}"))

@@ -21,7 +21,6 @@ Collective on the matrices' communicator; SciPy input runs on ``COMM_SELF``.
 
 from __future__ import annotations
 
-import re
 import time
 
 import numpy as np
@@ -29,6 +28,7 @@ import numpy as np
 from ..core.validation import is_symmetric
 from ..petsc import import_petsc
 from ..petsc.mat import mat_from_scipy
+from ..petsc.options import ACTIVE_SET, ARGUMENT_ERRORS, PetscOptionError, petsc_error_line
 from ..petsc.reduced_pencil import ReducedPencilSolver
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
 from .scaling import normalised, restore, scaled_value
@@ -57,7 +57,7 @@ def _spurious_value(problem: EiCPProblem, target: float) -> float:
 
 def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
                lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
-               options: dict | None = None, prefix: str = "meicp_as_", follow: bool = True,
+               options: dict | None = None, prefix: str = ACTIVE_SET, follow: bool = True,
                **_ignored) -> EiCPResult:
     """One certified MEiCP solution by the active-set search (see the module docstring).
 
@@ -113,7 +113,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                                          target=prev - 1e-8 * max(abs(prev), scales[0] / max(scales[1], 1e-300)))
                 else:
                     pairs = solver.solve(removed, initial)
-            except PETSc.Error as exc:  # e.g. an exactly singular shifted matrix at the target
+            except (PETSc.Error, PetscOptionError) as exc:  # e.g. a singular shifted matrix at the target
                 status, message = "petsc_error", _petsc_error_message(exc, it, S.size, prefix)
                 break
             if lam_min is not None:
@@ -171,20 +171,18 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     return result
 
 
-_RANK_TAG = re.compile(r"^\[\d+\]\s*")  # PETSc's "[0] " before each line of its error text
-#: PETSc error codes of a wrong argument or option value (PETSC_ERR_SUP, PETSC_ERR_ARG_*)
-_ARGUMENT_ERRORS = (56, 60, 61, 62, 63)
-
-
 def _petsc_error_message(exc, it: int, support: int, prefix: str) -> str:
     """What went wrong, with PETSc's own last line, and the hint that fits the error: a bad
     option value (``-meicp_as_eps_tol abc``) is not cured by another target."""
-    text = str(exc).strip()
-    detail = ": " + _RANK_TAG.sub("", text.splitlines()[-1].strip()) if text else ""
+    where = f"SLEPc/PETSc error {getattr(exc, 'ierr', '?')} in eigen-solve {it} (support of size {support})"
+    if isinstance(exc, PetscOptionError):  # set_from_options named the prefix and the options given
+        return f"{where}: {exc}"
+    line = petsc_error_line(exc)
+    detail = f": {line}" if line else ""
     hint = (f"check the -{prefix}* options and the [petsc] table (a value PETSc cannot use)"
-            if getattr(exc, "ierr", None) in _ARGUMENT_ERRORS
+            if getattr(exc, "ierr", None) in ARGUMENT_ERRORS
             else f"a different target (-{prefix}eps_target) may avoid it")
-    return f"SLEPc/PETSc error {getattr(exc, 'ierr', '?')} in eigen-solve {it} (support of size {support}){detail}; {hint}"
+    return f"{where}{detail}; {hint}"
 
 
 def _violations(problem, S, removed, lam, xi, scales):

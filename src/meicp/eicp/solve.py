@@ -21,6 +21,7 @@ import numpy as np
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.validation import is_symmetric
 from ..petsc.comm import mpi_comm
+from ..petsc.options import PetscOptionError
 from .active_set import active_set
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
@@ -132,6 +133,8 @@ def _solve_auto(problem: EiCPProblem, kw: dict) -> EiCPResult:
             run_kw.update(_best_start(problem, candidates, kw.get("lam_min")))
         try:
             result = _run(name, problem, run_kw)
+        except PetscOptionError:  # a value the user gave PETSc: bad input, whichever method reads it
+            raise
         except ProblemError as exc:  # this method does not apply here; the next may
             attempts.append((name, "not_applicable", str(exc)))
             continue

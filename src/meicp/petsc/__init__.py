@@ -54,6 +54,19 @@ def init(argv: list[str] | None = None) -> None:
         sys.modules["petsc4py.PETSc"].Options().insertString(" ".join(_ARGV))
 
 
+def given_options() -> list[str]:
+    """The names (without the dash) of the options given to :func:`init`."""
+    return [a.lstrip("-") for a in _ARGV if a.startswith("-") and not _is_number(a)]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
 def import_petsc():
     """Return the ``PETSc`` module, initialising PETSc and SLEPc with the options given to
     :func:`init` (SLEPc is initialised with PETSc so that the order of first use is irrelevant).

@@ -28,9 +28,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import import_petsc
-from .options import configure_and_solve
+from .options import EICP_VI, configure_and_solve
 
-PREFIX = "meicp_eicp_vi_"
+PREFIX = EICP_VI
 
 
 class BorderedJacobian:

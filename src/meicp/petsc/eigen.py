@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core.errors import ConvergenceError
 from . import import_petsc, import_slepc
-from .options import OptionsScope
+from .options import GHEP, OptionsScope
 
 
 @dataclass
@@ -50,7 +50,7 @@ def ghep_defaults(nev: int, target: float) -> dict:
     }
 
 
-def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = "meicp_ghep_",
+def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = GHEP,
                options: dict | None = None) -> EigenPairs:
     """The ``nev`` eigenpairs of the symmetric-definite pencil (A, B) nearest ``target``.
 
@@ -64,8 +64,7 @@ def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = "meicp_
     try:
         eps.setOperators(A, B)
         with OptionsScope(prefix, ghep_defaults(nev, target), options) as scope:
-            eps.setOptionsPrefix(prefix)
-            eps.setFromOptions()
+            scope.configure(eps)
             eps.solve()
         nconv = eps.getConverged()
         values, vectors, residuals = [], [], []

@@ -11,9 +11,9 @@ from __future__ import annotations
 from ..core.validation import is_symmetric
 from . import import_petsc
 from .mat import is_petsc_mat, mat_from_scipy
-from .options import OptionsScope
+from .options import INERTIA, OptionsScope
 
-PREFIX = "meicp_inertia_"
+PREFIX = INERTIA
 
 
 def inertia(A) -> tuple[int, int, int]:
@@ -27,9 +27,8 @@ def inertia(A) -> tuple[int, int, int]:
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
                     "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_13": 1,
                     "mat_mumps_icntl_24": 1}
-        with OptionsScope(PREFIX, defaults):
-            ksp.setOptionsPrefix(PREFIX)
-            ksp.setFromOptions()
+        with OptionsScope(PREFIX, defaults) as scope:
+            scope.configure(ksp)
             ksp.setUp()
         nneg, nzero, npos = ksp.getPC().getFactorMatrix().getInertia()
         return int(nneg), int(nzero), int(npos)

@@ -21,9 +21,9 @@ import scipy.sparse as sp
 from ..core.errors import ProblemError
 from . import import_petsc
 from .mat import mat_from_scipy, vec_to_numpy
-from .options import configure_and_solve
+from .options import LCP, LU, configure_and_solve
 
-PREFIX = "meicp_lcp_"
+PREFIX = LCP
 
 
 def _petsc_operands(M, q, comm):
@@ -168,7 +168,7 @@ def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defau
     return out, its, reason, seconds, used
 
 
-def lu_solve(A, b, *, comm=None, prefix: str = "meicp_lu_", options: dict | None = None):
+def lu_solve(A, b, *, comm=None, prefix: str = LU, options: dict | None = None):
     """``A⁻¹ b`` by MUMPS LU (KSP preonly) for a SciPy matrix every rank holds, distributed over
     ``comm``; the solution is gathered on every rank.  Returns ``(x, ok)``: ``ok`` is False
     when MUMPS failed (singular matrix).  Collective."""

@@ -4,18 +4,102 @@ Precedence, lowest first: code defaults, then the scene's ``[petsc]`` table, the
 command line (options after ``--``, already in the database when PETSc starts).  A value
 already in the database is never overwritten, so the command line wins.  What a scope
 inserted is deleted on exit (the 3.18 database holds at most 512 entries), and options
-under the prefix that no PETSc object read are reported (PETSc's ``PetscOptionsUsed``).
+under the prefix that no PETSc object read are reported (PETSc's ``PetscOptionsUsed``);
+:func:`report_unused_options` reports, at the end of a run, every option left in the
+database that nothing read, whatever its prefix (``-eps_tol`` without one included).
+
+A value PETSc cannot use (``-meicp_as_eps_tol abc``, ``-meicp_ghep_st_type foo``) surfaces as
+a :class:`PetscOptionError` naming the prefix and the options given under it
+(:func:`set_from_options`), not as a PETSc traceback.
+
+Every prefix meicp reads is a constant here, listed with what reads it in :data:`PREFIXES`
+(``meicp --help`` prints that table): the solvers take their prefix from this module.
 """
 
 from __future__ import annotations
 
 import ctypes
 import logging
+import re
+import sys
 import time
 
-from . import import_petsc
+from ..core.errors import ProblemError
+from . import given_options, import_petsc
 
 log = logging.getLogger("meicp.petsc")
+
+#: the SLEPc eigen-solves of the active-set MEiCP search (``eps_*``, ``st_*``)
+ACTIVE_SET = "meicp_as_"
+#: the SLEPc eigen-solve of a symmetric-definite pencil: a scene's modal analysis
+GHEP = "meicp_ghep_"
+#: the MUMPS LDLᵀ factorisation whose inertia proves a symmetric pencil stable
+INERTIA = "meicp_inertia_"
+#: SNES VI of the static frictional equilibrium (the sparse mixed LCP)
+STATIC = "meicp_static_"
+#: MUMPS LU that polishes the static equilibrium's answer
+STATIC_POLISH = STATIC + "polish_"
+#: SNES VI (``newton``) and TAO (``tao``) of ``solve_lcp``
+LCP = "meicp_lcp_"
+#: MUMPS LU solves of :func:`meicp.petsc.lcp.lu_solve`
+LU = "meicp_lu_"
+#: SNES VI of the semismooth EiCP method
+EICP_VI = "meicp_eicp_vi_"
+#: ``meicp info --check``'s distributed eigen-solve
+SELFCHECK = "meicp_selfcheck_"
+
+#: prefix → what reads options under it (``meicp --help`` lists these)
+PREFIXES = {
+    ACTIVE_SET: "SLEPc EPS/ST of the active-set search (meicp solve, meicp eicp)",
+    GHEP: "SLEPc EPS/ST of the modal analysis of a scene without contact",
+    INERTIA: "MUMPS LDLᵀ (KSP/PC) whose inertia proves a symmetric pencil stable",
+    STATIC: "SNES VI of the static frictional equilibrium (states = \"solve\")",
+    STATIC_POLISH: "MUMPS LU polishing the static equilibrium",
+    LCP: "SNES VI / TAO of meicp lcp --method newton | tao",
+    LU: "MUMPS LU solves (KSP/PC)",
+    EICP_VI: "SNES VI of the semismooth EiCP method",
+    SELFCHECK: "SLEPc EPS of meicp info --check",
+}
+#: options PETSc reads only in PetscFinalize, after the end-of-run report
+_READ_AT_FINALIZE = {"options_left", "options_view", "malloc_dump", "malloc_view", "memory_view",
+                     "objects_dump"}
+#: PETSc error codes of a wrong argument or option value (PETSC_ERR_SUP, _ARG_SIZ, _ARG_IDN,
+#: _ARG_WRONG, _ARG_OUTOFRANGE, _ARG_INCOMP, _ARG_UNKNOWN_TYPE)
+ARGUMENT_ERRORS = (56, 60, 61, 62, 63, 75, 86)
+_RANK_TAG = re.compile(r"^\[\d+\]\s*")  # PETSc's "[0] " before each line of its error text
+
+
+class PetscOptionError(ProblemError):
+    """PETSc refused an option value (``ierr``: its error code)."""
+
+    def __init__(self, message: str, ierr: int | None = None):
+        super().__init__(message)
+        self.ierr = ierr
+
+
+def petsc_error_line(exc) -> str:
+    """The last line of a PETSc error's text, without the rank tag (what went wrong)."""
+    text = str(exc).strip()
+    return _RANK_TAG.sub("", text.splitlines()[-1].strip()) if text else ""
+
+
+def set_from_options(obj, prefix: str, defaults=()) -> None:
+    """``obj.setOptionsPrefix(prefix); obj.setFromOptions()``, with a value PETSc rejects
+    reported as a :class:`PetscOptionError` naming the prefix and the options given under it
+    (the command line's and the scene's; ``defaults``: names to leave out, the code's own)."""
+    PETSc = import_petsc()
+    obj.setOptionsPrefix(prefix)
+    try:
+        obj.setFromOptions()
+    except PETSc.Error as exc:
+        if getattr(exc, "ierr", None) not in ARGUMENT_ERRORS:
+            raise
+        given = " ".join(f"-{name}" + (f" {value}" if value else "")
+                         for name, value in sorted(PETSc.Options().getAll().items())
+                         if name.startswith(prefix) and name not in defaults)
+        raise PetscOptionError(f"PETSc cannot use an option value under -{prefix}: {petsc_error_line(exc)}"
+                               f"; check the -{prefix}* options and the scene's [petsc] table"
+                               + (f" (given: {given})" if given else ""), exc.ierr) from None
 
 
 def _format(value) -> str | None:
@@ -33,8 +117,8 @@ class OptionsScope:
     keys without the leading dash and without the prefix, values as Python objects
     (``True`` for a flag).  Example::
 
-        with OptionsScope("meicp_eps_", {"eps_tol": 1e-10}, scene.petsc) as opts:
-            eps.setOptionsPrefix(opts.prefix); eps.setFromOptions()
+        with OptionsScope(GHEP, {"eps_tol": 1e-10}, scene.petsc) as opts:
+            opts.configure(eps)
         opts.unused  # names under the prefix that nothing read
 
     The first layer is the code's defaults: those that nothing read (e.g. MUMPS options when
@@ -65,6 +149,11 @@ class OptionsScope:
                     self._defaults_only.add(name)
         return self
 
+    def configure(self, obj) -> None:
+        """Give a PETSc/SLEPc object this scope's prefix and its options
+        (:func:`set_from_options`: a rejected value names the options the user gave)."""
+        set_from_options(obj, self.prefix, self._defaults_only)
+
     def __exit__(self, *exc) -> None:
         PETSc = import_petsc()
         db = PETSc.Options()
@@ -81,10 +170,31 @@ class OptionsScope:
         return sorted(n for n in db.getAll() if n.startswith(self.prefix))
 
 
+_REPORTED: set = set()
+
+
 def report_unused(names) -> None:
-    """Warn (once per call) about options that no PETSc object read."""
+    """Warn about options that no PETSc object read (each name once per process)."""
+    names = [n for n in names if n not in _REPORTED]
     if names:
+        _REPORTED.update(names)
         log.warning("PETSc options not used by any solver: %s", ", ".join("-" + n for n in names))
+
+
+def unused_options() -> list[str]:
+    """Options in PETSc's database that no PETSc object has read (``PetscOptionsUsed``),
+    whatever their prefix; every option given to :func:`~meicp.petsc.init` when PETSc was
+    never started.  Local (no communication)."""
+    if "petsc4py.PETSc" not in sys.modules:
+        return sorted(given_options())
+    db = import_petsc().Options()
+    return sorted(n for n in db.getAll() if n not in _READ_AT_FINALIZE and not options_used(n))
+
+
+def report_unused_options() -> None:
+    """Warn (through the ``meicp`` logger, rank 0) about every option no solver read: the
+    end-of-run counterpart of PETSc's ``-options_left``."""
+    report_unused(unused_options())
 
 
 _USED = None
@@ -112,9 +222,8 @@ def configure_and_solve(solver, prefix: str, defaults: dict, options: dict | Non
     """Give a SNES, TAO or KSP its options (code defaults < ``options`` < command line) under
     ``prefix``, call ``solve()`` and return ``(seconds, reason_name, iterations)``."""
     t0 = time.perf_counter()
-    with OptionsScope(prefix, defaults, options):
-        solver.setOptionsPrefix(prefix)
-        solver.setFromOptions()
+    with OptionsScope(prefix, defaults, options) as scope:
+        scope.configure(solver)
         solve()
     seconds = time.perf_counter() - t0
     return seconds, reason_name(solver), solver.getIterationNumber()

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import import_petsc, import_slepc
 from .mat import vec_to_numpy
-from .options import OptionsScope, report_unused
+from .options import ACTIVE_SET, OptionsScope, report_unused
 
 
 class ReducedPencilSolver:
@@ -38,7 +38,7 @@ class ReducedPencilSolver:
     """
 
     def __init__(self, A, B, *, symmetric: bool, target: float, spurious: float, nev: int = 4,
-                 prefix: str = "meicp_as_", options: dict | None = None):
+                 prefix: str = ACTIVE_SET, options: dict | None = None):
         PETSc = import_petsc()
         SLEPc = import_slepc()
         # A and B copied into their union pattern, so that (A − τB) and the zeroed work
@@ -101,7 +101,7 @@ class ReducedPencilSolver:
         with OptionsScope(self.prefix, self._defaults, self._options, warn=False) as scope:
             first = not self._configured
             if first:
-                self.eps.setFromOptions()
+                scope.configure(self.eps)
                 self.eps.setUp()
                 self._configured = True
                 self._target = self.eps.getTarget()

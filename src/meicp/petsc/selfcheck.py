@@ -14,6 +14,7 @@ from . import import_petsc
 from .comm import to_petsc_comm
 from .eigen import solve_ghep
 from .mat import mat_from_local_csr, ownership
+from .options import SELFCHECK
 
 
 def laplacian_rows(nx: int, ny: int, start: int, end: int) -> sp.csr_matrix:
@@ -49,7 +50,7 @@ def ghep_selfcheck(comm=None, nx: int = 12, ny: int = 10, nev: int = 4) -> dict:
     K = mat_from_local_csr(pcomm, laplacian_rows(nx, ny, start, end), n)
     M = mat_from_local_csr(pcomm, mass_rows(nx, ny, start, end), n)
     t1 = time.perf_counter()
-    pairs = solve_ghep(K, M, nev=nev, target=0.0, prefix="meicp_selfcheck_")
+    pairs = solve_ghep(K, M, nev=nev, target=0.0, prefix=SELFCHECK)
     t2 = time.perf_counter()
     K.destroy()
     M.destroy()

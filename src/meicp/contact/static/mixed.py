@@ -12,6 +12,7 @@ import scipy.sparse.linalg as spla
 
 from ...petsc.comm import mpi_comm
 from ...petsc.lcp import lu_solve, snes_vi_affine
+from ...petsc.options import STATIC, STATIC_POLISH
 from .data import StaticData
 from .result import StaticResult
 from .states import settle
@@ -26,7 +27,7 @@ MIXED_POLISH_ITERS = 40
 #: certificate tolerance of the mixed formulation (complementarity and equilibrium)
 MIXED_CERT_TOL = 1e-9
 #: options prefix of the mixed formulation's SNES VI
-MIXED_PREFIX = "meicp_static_"
+MIXED_PREFIX = STATIC
 
 # per-contact states of the polish
 _SEP, _STICK, _PLUS, _MINUS, _CONTACT = 0, 1, 2, 3, 4
@@ -155,7 +156,7 @@ class MixedSystem:
             blocks = [[self.K, -self.Cn.T], [Rn_u, Rn_n]]
         A = sp.bmat(blocks, format="csr")
         rhs = np.concatenate([self.b, rhs_n, rhs_t]) if nF else np.concatenate([self.b, rhs_n])
-        sol, ok = lu_solve(A, rhs, comm=comm, prefix=MIXED_PREFIX + "polish_",
+        sol, ok = lu_solve(A, rhs, comm=comm, prefix=STATIC_POLISH,
                            options={"mat_mumps_icntl_14": 400})
         if not ok:
             return None
