@@ -27,6 +27,7 @@ import time
 import numpy as np
 
 from ..core.errors import ProblemError
+from ..core.progress import Progress
 from ..eicp.problem import lam_floor
 from ..eicp.solve import solve_eicp
 from ..lattice.model import LatticeModel
@@ -98,8 +99,11 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     # -- one MEiCP per grazing case -------------------------------------------------------
     method = method or scene.solver.method
     modes, evidences, stable_flags, eicps = [], [], [], []
+    n_grazing = sum(s == "grazing" for cs in sets for s in cs.states)
+    progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
     with destroying(K, M):
-        for case in grazing_cases(sets):
+        for k, case in enumerate(grazing_cases(sets)):
+            progress.update(k, detail=f"{len(modes)} mode(s) so far")
             t0 = time.perf_counter()
             with stage("reduce"):
                 pen = pencil_of(K, M, model, sets, case, static)

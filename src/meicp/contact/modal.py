@@ -100,8 +100,9 @@ def modal_analysis(scene: Scene, model: LatticeModel, comm=None, *, nev: int | N
                            f"DOFs (LDLᵀ inertia of −K: no σ ≥ 0), so every motion oscillates; {computed}")
     else:
         result.evidence = (f"no friction, hence no frictional instability; but K has {held_back} eigenvalue(s) "
-                           f"σ ≥ 0 on the {r} free DOFs (LDLᵀ inertia of −K): motions of zero stiffness (rigid-body motions the boundary does not hold), σ = 0, neither "
-                           f"growing nor oscillating; {computed}")
+                           f"σ ≥ 0 on the {r} free DOFs (LDLᵀ inertia of −K): motions of zero stiffness "
+                           f"(rigid-body motions the boundary does not hold), σ = 0, neither growing nor "
+                           f"oscillating; {computed}")
     result.status = "solved" if modes else "certificate_failed"
     if not modes:
         result.message = f"none of the {dropped} eigenpairs SLEPc returned passed its certificate (tolerance {tol:.0e})"

@@ -25,6 +25,7 @@ import time
 
 import numpy as np
 
+from ..core.progress import Progress
 from ..core.validation import is_symmetric
 from ..petsc import import_petsc
 from ..petsc.mat import mat_from_scipy
@@ -92,6 +93,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     single_moves = False
     initial = None
     PETSc = import_petsc()
+    # the search ends at the first clean support, so max_iter is a bound, not a count
+    progress = Progress(f"active-set search (at most {max_iter} support updates)", unit="eigen-solves")
     try:
 
         solver = ReducedPencilSolver(A, B, symmetric=symmetric, target=target,
@@ -135,6 +138,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
             history.append({"iteration": it, "lam": lam, "support": int(S.size), "leave": int(leave.size),
                             "enter": int(enter.size), "eps_residual": err,
                             "seconds": time.perf_counter() - t_solve})
+            progress.update(it, detail=f"λ = {lam:.6g} on a support of {S.size}, {leave.size} leaving, "
+                                       f"{enter.size} entering")
             if leave.size == 0 and enter.size == 0:
                 sol = certify_pair(problem, lam, xi, scales)
                 if sol.residual <= tol:

@@ -38,6 +38,7 @@ the solutions gathered on every rank.
 from __future__ import annotations
 
 import itertools
+import math
 import time
 
 import numpy as np
@@ -45,6 +46,7 @@ import scipy.linalg
 from scipy.optimize import linprog
 
 from ..core.errors import ProblemError
+from ..core.progress import Progress
 from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certificate_parts, lam_floor
 from .scaling import PencilScaling, refine_pair
@@ -381,9 +383,21 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     rank, size = (0, 1) if comm is None else (comm.Get_rank(), comm.Get_size())
     t0 = time.perf_counter()
     e = _Enumerator(problem, tol, lam_min, lam_max)
+    # this rank's share of the supports, and their cost for the estimate of the time left: a
+    # support of size k is a dense eigen-solve of order |F| + k, batched; measured at |J| = 18
+    # the time per support grows about linearly with the order (the batches' overhead), not
+    # as its cube
+    share = [len(range(rank, math.comb(J.size, k), size)) for k in range(J.size + 1)]
+    cost = [float(share[k]) * (problem.F.size + k) for k in range(J.size + 1)]
+    progress = Progress("enumeration" + (f" (rank 0's share on {size} ranks)" if size > 1 else ""),
+                        total=sum(share), unit="supports", work=sum(cost))
+    done, work = 0, 0.0
     for k in range(J.size + 1):
         for chunk in _batches(_combinations(J, k, rank, size), BATCH):
             e.run_stack(chunk)
+            done += len(chunk)
+            work += len(chunk) * float(problem.F.size + k)
+            progress.update(done, work, f"support size {k} of {J.size}, {len(e.rows)} solution(s) so far")
     lams, X, W, masks, res = e.arrays()
     counts = np.array([e.eigen_solves, e.slow_path, e.unverified, e.out_of_range, e.infinite, e.refined,
                        e.second_pass])

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..core.errors import ProblemError
+from ..core.progress import Progress
 from .problem import DEFAULT_TOL, LCPProblem, LCPResult, certify, relative_residual
 
 MAX_N = 18
@@ -116,9 +117,11 @@ def enumerate_lcp(problem: LCPProblem, *, tol: float = DEFAULT_TOL, max_n: int =
     visited = unresolved = 0
     worst_cond = 0.0
     eps = np.finfo(float).eps
+    progress = Progress("LCP enumeration", total=2 ** n, unit="supports")
     for size in range(n + 1):
         for S in itertools.combinations(range(n), size):
             visited += 1
+            progress.update(visited, detail=f"support size {size} of {n}, {len(found)} solution(s) so far")
             S = np.array(S, dtype=np.int64)
             x, direct = (np.zeros(n), True) if size == 0 else _solve_support(Ms, scaled.q, S)
             if x is None:

@@ -1,0 +1,73 @@
+"""Progress lines for long loops (support enumerations, searches): count, rate and the
+estimated time left, through the ``meicp`` logger at INFO level — so on rank 0 only, shown
+by ``meicp solve`` by default and by the other commands with ``-v``, silent under ``-q``.
+
+Cheap by construction: :meth:`Progress.update` reads a clock and returns unless
+``INTERVAL`` seconds have passed since the last line (the first line waits ``FIRST``
+seconds, so short loops print nothing).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+#: seconds before the first line (a loop that ends sooner prints nothing)
+FIRST = 2.0
+#: seconds between lines
+INTERVAL = 3.0
+
+log = logging.getLogger("meicp")
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+class Progress:
+    """Report the progress of a loop over ``total`` items (None: unknown).
+
+    ``work``: the total cost in any unit, when items cost unequal amounts (e.g. supports of
+    growing size: the estimate of the time left then follows the cost, not the count);
+    ``unit``: what an item is (``"supports"``).  Call :meth:`update` with the items done
+    (and the work done) as often as is convenient::
+
+        progress = Progress("enumeration", total=2 ** 13, unit="supports")
+        for k, chunk in enumerate(chunks):
+            ...
+            progress.update(done)
+    """
+
+    def __init__(self, what: str, total: int | None = None, *, unit: str = "", work: float | None = None,
+                 clock=time.monotonic):
+        self.what, self.total, self.unit = what, total, unit
+        self.work = float(work) if work is not None else (float(total) if total is not None else None)
+        self.clock = clock
+        self.start = clock()
+        self.next = self.start + FIRST
+        self.lines = 0
+
+    def update(self, done: int, work_done: float | None = None, detail: str = "") -> None:
+        """``done`` items (and ``work_done`` units of work) finished; ``detail``: appended text."""
+        now = self.clock()
+        if now < self.next or not log.isEnabledFor(logging.INFO):
+            return
+        self.next = now + INTERVAL
+        self.lines += 1
+        elapsed = max(now - self.start, 1e-9)
+        unit = f" {self.unit}" if self.unit else ""
+        text = f"{self.what}: {done:,}" + (f" of {self.total:,}" if self.total is not None else "") + unit
+        if self.total:
+            text += f" ({100.0 * done / self.total:.0f} %)"
+        rate = done / elapsed
+        text += (f", {rate:,.0f}" if rate >= 100 else f", {rate:.3g}") + f"{unit}/s"
+        fraction = None
+        if self.work:
+            fraction = (done if work_done is None else work_done) / self.work
+        if fraction and 0 < fraction < 1:
+            text += f", about {_duration(elapsed * (1 - fraction) / fraction)} left"
+        log.info(text + (f"; {detail}" if detail else ""))
