@@ -31,8 +31,8 @@ def test_solve_on_two_ranks_prints_once_and_matches(tmp_path):
     ("[lattice]\nnx = 4\nbogus = 1\n[[layers]]\nname='A'\nrows=2\nstiffness=1.0\ndensity=1.0\n", "bogus"),
     ("[lattice]\nnx = 4\n[[layers]]\nname='A'\nrows=2\nstiffness=1.0\ndensity=1.0\n"
      "[boundary]\nbottom='contact'\ntop='fixed'\n[contact]\nfriction=-1.0\n", "friction"),
-    ("[lattice]\nnx = 4\n[[layers]]\nname='A'\nrows=2\nstiffness=1.0\ndensity=1.0\n[boundary]\ntop='fixed'\n",
-     "no contact"),
+    ("[lattice]\nnxx = 4\n[[layers]]\nname='A'\nrows=2\nstiffness=1.0\ndensity=1.0\n[boundary]\ntop='fixed'\n",
+     "unknown key lattice.nxx (did you mean nx?"),
 ])
 def test_bad_scene_on_two_ranks_exits_promptly_once_and_writes_nothing(tmp_path, text, words):
     scene = tmp_path / "bad.toml"

@@ -188,6 +188,86 @@ def test_xdmf_readable_by_meshio(written, two_layers):
                                   [STATE_CODES[s] for s in BASE_STATES])
 
 
+def test_xdmf_has_contact_reactions_and_node_indices(written, two_layers):
+    """r_n, r_t (NaN off the contact nodes) and the indices i, j as fields ParaView and
+    meshio read; the code legends in a comment at the top of the XDMF file."""
+    meshio = pytest.importorskip("meshio")
+    out, files, result = written
+    mesh = meshio.read(files["xdmf"])
+    nx = two_layers.nx
+    for name in ("r_n", "r_t"):
+        field = mesh.point_data[name]
+        np.testing.assert_array_equal(field[:nx], getattr(result.static, name))
+        assert np.all(np.isnan(field[nx:]))
+    np.testing.assert_array_equal(mesh.point_data["i"], np.tile(np.arange(nx), two_layers.ny))
+    np.testing.assert_array_equal(mesh.point_data["j"], np.repeat(np.arange(two_layers.ny), nx))
+    head = files["xdmf"].read_text().split("<Xdmf")[0]
+    assert "contact_state   0 not_a_contact_node, 1 stick, 2 slip+, 3 slip-" in head
+    assert "bond_kind       0 horizontal, 1 vertical, 2 diagonal, 3 antidiagonal" in head
+
+
+def test_every_dataset_says_what_it_is_and_that_the_model_is_dimensionless(written):
+    """CF-style long_name and units on every dataset of both files; code legends as
+    flag_values / flag_meanings / legend attributes (h5dump shows them)."""
+    import h5py
+
+    out, _, _ = written
+    for name in ("results.h5", "lattice.h5"):
+        with h5py.File(out / name, "r") as f:
+            assert "dimensionless" in f.attrs["units_convention"]
+            seen = []
+            f.visititems(lambda key, obj: seen.append((key, obj)) if hasattr(obj, "shape") else None)
+            assert len(seen) > 10
+            for key, obj in seen:
+                assert obj.attrs["units"] == "1" and obj.attrs["long_name"], (name, key)
+    with h5py.File(out / "results.h5", "r") as f:
+        code = f["contact/base/code"].attrs
+        assert list(code["flag_values"]) == [0, 1, 2, 3, 4, 5, -1]
+        assert code["flag_meanings"] == "not_a_contact_node stick slip+ slip- separated grazing unknown"
+        assert "1/time^2" in f["modes/sigma"].attrs["long_name"]
+    with h5py.File(out / "lattice.h5", "r") as f:
+        assert f["bonds/kind"].attrs["legend"] == "0 horizontal, 1 vertical, 2 diagonal, 3 antidiagonal"
+        assert f["fields/contact_state"].attrs["flag_meanings"].startswith("not_a_contact_node stick")
+        assert "force" in f["fields/r_n"].attrs["long_name"]
+
+
+class _Bracket(float):
+    """A critical friction as issue 14's will be: a float carrying a certified bracket."""
+
+    lower, upper, exact, evidence = 1.9, 1.91, False, "bracket by inertia"
+
+
+@pytest.mark.parametrize("mu_c, expected", [
+    (1.906, {"value": 1.906, "found": True}),
+    (float("inf"), {"value": float("inf"), "found": False}),
+    (_Bracket(1.905), {"value": 1.905, "found": True, "lower": 1.9, "upper": 1.91, "exact": False,
+                       "evidence": "bracket by inertia"}),
+])
+def test_critical_friction_and_its_bracket_in_results_h5(tmp_path, two_layers, mu_c, expected):
+    import h5py
+
+    files = write_results(tmp_path / "o", two_layers, unstable_result(two_layers), plots=False,
+                          critical_friction=mu_c)
+    with h5py.File(files["results"], "r") as f:
+        got = {k: (v.item() if hasattr(v, "item") else v) for k, v in f["critical_friction"].attrs.items()}
+    assert got == expected
+
+
+def test_modal_result_written_like_any_mode(tmp_path):
+    """A scene without contact: its vibration modes (σ = −ω²) with their frequency."""
+    import h5py
+
+    import meicp
+
+    scene = load_scene(SCENES / "sheared.toml")
+    result = meicp.analyze(scene, nev=3)
+    files = write_results(tmp_path / "m", scene, result, plots=False)
+    with h5py.File(files["results"], "r") as f:
+        assert f.attrs["analysis"] == "modal" and f.attrs["verdict"] == "no contact" and f.attrs["n_modes"] == 3
+        np.testing.assert_allclose(f["modes/frequency"][()], np.sqrt(-f["modes/sigma"][()]))
+        assert np.all(f["modes/growth_rate"][()] == 0) and "critical_friction" not in f
+
+
 def test_pngs_are_images(written):
     out, files, _ = written
     for key in ("mode_png", "contacts_png"):
@@ -315,7 +395,7 @@ def fake_analyze(monkeypatch):
     calls = []
     module = types.ModuleType("fake_instability")
 
-    def analyze(scene, comm=None, scene_path=None):
+    def analyze(scene, comm=None, scene_path=None, **overrides):
         import logging
 
         calls.append(scene_path)

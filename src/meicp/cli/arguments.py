@@ -8,6 +8,7 @@ argument, so the command line and the Python API refuse the same values with the
 from __future__ import annotations
 
 import argparse
+import re
 
 from ..core.errors import ProblemError
 from ..core.validation import as_int, as_real, check_tol
@@ -34,6 +35,30 @@ def finite(text: str) -> float:
         return as_real(_number(text), "the value")
     except ProblemError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+#: a keyword hint of the Python API inside a message: method='enumerate', nev=8
+_API_HINT = re.compile(r"\b(method|target|nev)=(['\"]?)([\w.+-]+)\2")
+
+
+def cli_spelling(text: str) -> str:
+    """A solver's message with the Python API's keyword hints spelt as this command line's
+    flags: "use method='enumerate'" becomes "use --method enumerate"."""
+    return _API_HINT.sub(lambda m: f"--{m.group(1)} {m.group(3)}", text or "")
+
+
+def verbosity(parser: argparse.ArgumentParser) -> None:
+    """``-v``/``-q`` after the subcommand as well as before it (``meicp solve s.toml -v``): the
+    counts are added to the top-level ones by :func:`meicp.cli.main.main`."""
+    parser.add_argument("-v", "--verbose", dest="verbose_after", action="count", default=argparse.SUPPRESS,
+                        help="-v progress, -vv debug (also before the subcommand)")
+    parser.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                        help="warnings and errors only, no progress lines")
+
+
+def verbosity_of(args) -> tuple[int, bool]:
+    """(verbosity, quiet) of parsed arguments, wherever -v/-q were given."""
+    return getattr(args, "verbose", 0) + getattr(args, "verbose_after", 0), bool(getattr(args, "quiet", False))
 
 
 def integer(minimum: int | None = None, maximum: int | None = None):

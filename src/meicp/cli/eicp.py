@@ -9,7 +9,7 @@ import numpy as np
 from ..core.log import rank0_print
 from ..eicp.solve import available_methods, solve_eicp
 from ..io.problem_files import read_problem
-from .arguments import finite, tolerance
+from .arguments import cli_spelling, finite, tolerance, verbosity
 from .exit import Exit
 
 
@@ -22,6 +22,7 @@ def register(sub) -> None:
     p.add_argument("--target", type=finite, default=0.0, help="shift for the SLEPc solves (active-set)")
     p.add_argument("--tol", type=tolerance, default=1e-10, help="relative certificate tolerance, in (0, 1e-2]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    verbosity(p)
     p.set_defaults(run=run)
 
 
@@ -36,13 +37,13 @@ def run(args) -> int:
     if args.json:
         rank0_print(json.dumps({
             "file": args.file, "method": r.method, "status": r.status, "success": r.success,
-            "message": r.message, "iterations": r.iterations, "timings": r.timings,
+            "message": cli_spelling(r.message), "iterations": r.iterations, "timings": r.timings,
             "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
                            "x": s.x.tolist()} for s in r.solutions]}, indent=2))
         return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED
     n = np.shape(data["A"])[0]
     rank0_print(f"EiCP from {args.file}: n = {n}, |J| = {n if J is None else J.size}")
-    rank0_print(r.summary())
+    rank0_print(cli_spelling(r.summary()))
     if r.solutions:
         rank0_print(f"{'λ':>22}  {'residual':>9}  {'|support|':>9}  support")
         for s in r.solutions[:50]:

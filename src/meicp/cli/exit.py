@@ -13,3 +13,13 @@ class Exit(IntEnum):
     FAILED = 1
     BAD_INPUT = 2
     INTERNAL = 3
+
+
+#: what each exit code means, for ``meicp --help``
+MEANING = {
+    Exit.OK: "the command answered: stable, unstable, undecided with what was proved, or the "
+             "modal analysis of a scene without contact",
+    Exit.FAILED: "no certified answer: a solver stopped without one (the message says why)",
+    Exit.BAD_INPUT: "bad input or usage: a scene key, a file, an argument, a PETSc option value",
+    Exit.INTERNAL: "internal error: a bug in meicp (run again with -vv and report it)",
+}

@@ -5,6 +5,7 @@ from __future__ import annotations
 from ..core.log import rank0_print
 from ..info import collect, format_report
 from ..petsc.selfcheck import ghep_selfcheck
+from .arguments import verbosity
 from .exit import Exit
 
 
@@ -12,6 +13,7 @@ def register(sub) -> None:
     p = sub.add_parser("info", help="versions of Python, NumPy, PETSc, SLEPc, MPI, h5py; MPI ranks")
     p.add_argument("--check", action="store_true",
                    help="also solve a small distributed eigenproblem and compare it with SciPy")
+    verbosity(p)
     p.set_defaults(run=run)
 
 

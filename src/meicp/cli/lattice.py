@@ -15,6 +15,7 @@ from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..petsc.mat import destroying, diagonal, nonzeros
 from ..plotting.lattice import plot_lattice
+from .arguments import verbosity
 from .exit import Exit
 
 
@@ -26,6 +27,7 @@ def register(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="skip the PNG")
     p.add_argument("--no-assemble", action="store_true",
                    help="skip K and M (geometry, bonds and materials only)")
+    verbosity(p)
     p.set_defaults(run=run)
 
 

@@ -10,7 +10,7 @@ from ..core.log import rank0_print
 from ..io.problem_files import read_problem
 from ..lcp.classes import MAX_EXACT_LIMIT, classify
 from ..lcp.solve import available_methods, solve_lcp
-from .arguments import integer, tolerance
+from .arguments import integer, tolerance, verbosity
 from .exit import Exit
 
 
@@ -21,6 +21,7 @@ def register(sub) -> None:
     p.add_argument("--tol", type=tolerance, default=1e-10, help="relative certificate tolerance, in (0, 1e-2]")
     p.add_argument("--all", action="store_true", help="every solution (support enumeration, small n)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    verbosity(p)
     p.set_defaults(run=run_lcp)
 
     p = sub.add_parser("classify", help="matrix classes of M (P, Q, R0, Z, copositive, ...) and game value")
@@ -28,6 +29,7 @@ def register(sub) -> None:
     p.add_argument("--exact-limit", type=integer(0, MAX_EXACT_LIMIT), default=12,
                    help=f"largest n for the exponential exact tests (0 to {MAX_EXACT_LIMIT})")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    verbosity(p)
     p.set_defaults(run=run_classify)
 
 

@@ -5,7 +5,9 @@ and the scene's ``[petsc]`` table).  Errors are printed once, on rank 0 when eve
 failed alike; a failure on some ranks only ends the whole run with ``MPI_Abort`` after a
 short grace period, so a 2-rank run never hangs.
 
-Exit codes: :class:`~meicp.cli.exit.Exit`.
+Exit codes: :class:`~meicp.cli.exit.Exit`.  ``meicp --help`` lists them and the PETSc option
+prefixes (:data:`meicp.petsc.options.PREFIXES`); at the end of a run every PETSc option no
+solver read is reported (:func:`~meicp.petsc.options.report_unused_options`).
 """
 
 from __future__ import annotations
@@ -15,11 +17,14 @@ import sys
 import time
 import traceback
 
+from .. import __version__
 from ..core.errors import ConvergenceError, MeicpError, ProblemError
 from ..core.log import configure_logging, rank0_print, world_rank
 from ..petsc import init
+from ..petsc.options import PREFIXES, report_unused_options
 from . import eicp, info, lattice, lcp, solve
-from .exit import Exit
+from .arguments import verbosity_of
+from .exit import MEANING, Exit
 
 #: the subcommands, each a module with ``register(subparsers)``, in the order of ``--help``
 SUBCOMMANDS = (solve, info, lcp, eicp, lattice)
@@ -27,12 +32,25 @@ SUBCOMMANDS = (solve, info, lcp, eicp, lattice)
 GRACE_SECONDS = 3.0
 
 
+def epilog() -> str:
+    """The end of ``meicp --help``: PETSc options, their prefixes, the exit codes."""
+    width = max(len(p) for p in PREFIXES) + 1
+    lines = ["Options after -- go to the PETSc options database (they win over the scene's [petsc]",
+             "table), e.g. meicp solve s.toml -- -meicp_as_eps_view; options that no solver read are",
+             "reported at the end of the run.  meicp's solvers read them under these prefixes:", ""]
+    lines += [f"  -{prefix:<{width}} {what}" for prefix, what in PREFIXES.items()]
+    lines += ["", "exit codes:"] + [f"  {int(code)}  {text}" for code, text in MEANING.items()]
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="meicp",
         description="Stability of layered elastic lattices in frictional contact (MEiCP/LCP on PETSc/SLEPc).",
-        epilog="Options after -- go to the PETSc options database, e.g. meicp solve s.toml -- -meicp_as_eps_view")
+        epilog=epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"meicp {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="-v progress, -vv debug")
+    parser.add_argument("-q", "--quiet", action="store_true", help="warnings and errors only, no progress lines")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in SUBCOMMANDS:
         module.register(sub)
@@ -64,10 +82,14 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     own, petsc_args = _split_petsc_args(argv)
     args = build_parser().parse_args(own)
-    configure_logging(args.verbose)
+    args.verbose, args.quiet = verbosity_of(args)  # -v/-q before or after the subcommand
+    vars(args).pop("verbose_after", None)
+    configure_logging(-1 if args.quiet else args.verbose)
     init(petsc_args)
     try:
-        return args.run(args)
+        code = args.run(args)
+        report_unused_options()  # PETSc's own bookkeeping, every prefix (rank 0, via the logger)
+        return code
     except ProblemError as exc:
         code, text = Exit.BAD_INPUT, f"meicp: error: {exc}"
     except ConvergenceError as exc:

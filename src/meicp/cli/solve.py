@@ -1,33 +1,52 @@
-"""``meicp solve SCENE.toml [-o DIR] [--no-output] [-q] [-- PETSc options]``.
+"""``meicp solve SCENE.toml [-o DIR] [--no-output] [--json] [--method M] [--target T] [--nev N]
+[--critical-friction] [-v|-q] [-- PETSc options]``.
 
 Loads the scene (a bad scene fails before any work, exit 2), runs
-:func:`meicp.contact.instability.analyze` on every rank of ``MPI.COMM_WORLD``, prints a
-summary (stdout, rank 0) and writes ``results.h5``, ``lattice.h5`` + ``lattice.xdmf`` and the
-PNGs to DIR (default ``out/<scene stem>``; see :mod:`meicp.io.results`).
+:func:`meicp.contact.instability.analyze` on every rank of ``MPI.COMM_WORLD`` (a scene
+without contact gets its modal analysis), prints a summary (stdout, rank 0) and writes
+``results.h5``, ``lattice.h5`` + ``lattice.xdmf`` and the PNGs to DIR (default
+``out/<scene stem>``; see :mod:`meicp.io.results`).  ``--method``, ``--target`` and
+``--nev`` override the scene's ``[solver]`` table (recorded in results.h5).
+
+``--json``: instead of the summary, one JSON document on stdout (nothing else goes there;
+:func:`solve_json`): the verdict, the modes with σ and support, μ_c when asked, the
+output paths, timings and versions.  PETSc's own ``-log_view`` also prints to stdout: send
+it to a file (``-- -log_view :log.txt``).
 
 Progress goes to stderr through the ``meicp`` logger, each line stamped with the seconds
 since the start of the run: the phases of this command and of the analysis are shown by
 default (INFO), ``-q`` shows warnings only, ``-vv`` adds debug output.
 
-Exit codes: 0 the analysis answered (stable, unstable or undecided with ``success``), 1 it
-failed (``result.success`` is False, or a solver raised), 2 bad input.
+Exit codes: 0 the analysis answered (stable, unstable, undecided with ``success``, or a
+modal analysis), 1 it failed (``result.success`` is False, or a solver raised), 2 bad input.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import time
 from pathlib import Path
 
+from .. import __version__
 from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
-from ..contact.result import seconds
+from ..contact.modal import has_contact
+from ..contact.result import finite_or_none, seconds
 from ..core.errors import ProblemError
 from ..core.log import configure_logging, rank0_print
-from ..io.results import write_results
+from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene
+from ..petsc.stages import stage
+from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
 from .exit import Exit
+
+#: what ``--method`` may choose: the MEiCP methods :func:`analyze` decides with
+METHODS = ("auto", "enumerate", "active-set")
+#: what μ_c's number means when it carries no evidence of its own
+MU_C_EVIDENCE = ("smallest μ with a σ = 0 divergence mode for these states; every support of the condensed "
+                 "EiCP in μ enumerated, certified")
 
 log = logging.getLogger("meicp")
 
@@ -41,9 +60,19 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", metavar="DIR",
                    help="output directory, created if missing (default: out/<scene stem>)")
     p.add_argument("--no-output", action="store_true", help="print the summary only, write no files")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines, only the summary")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON document (verdict, modes, μ_c, outputs, timings, versions) instead "
+                        "of the summary; nothing else goes to stdout")
     p.add_argument("--critical-friction", action="store_true",
                    help="also compute μ_c, the smallest friction with a divergence mode (small scenes: enumeration)")
+    p.add_argument("--method", choices=METHODS,
+                   help="MEiCP method (default: the scene's [solver] method; auto = enumerate when small)")
+    p.add_argument("--target", type=finite,
+                   help="shift of the active-set search's SLEPc solves (default 0)")
+    p.add_argument("--nev", type=integer(1),
+                   help="eigenpairs per SLEPc solve; the vibration modes of a scene without contact "
+                        "(default: the scene's [solver] nev, else 4 / 6)")
+    verbosity(p)
     p.set_defaults(run=run)
 
 
@@ -61,15 +90,15 @@ def _configure_progress(args, t0: float):
     """Show INFO (phases) by default for this command; return a function that undoes it."""
     logger = logging.getLogger("meicp")
     old_level = logger.level
-    verbose = getattr(args, "verbose", 0) or 0
-    if args.quiet:
+    verbose, quiet = verbosity_of(args)
+    if quiet:
         logger.setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING)
     else:
         logger.setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
     ours = [h for h in logger.handlers if getattr(h, "_meicp", False)]
     if not ours:  # run() called without main(): give it the same rank-0 handler
         configure_logging(0)
-        logger.setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING if args.quiet else logging.INFO)
+        logger.setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING if quiet else logging.INFO)
         ours = [h for h in logger.handlers if getattr(h, "_meicp", False)]
     old = [(h, h.formatter) for h in ours]
     for h in ours:
@@ -98,8 +127,40 @@ def _check_output_dir(out: Path) -> None:
 
 
 def summary_rows(scene, result, *, ranks: int = 1) -> list[tuple[str, str]]:
-    """The (key, text) rows of the summary (:meth:`InstabilityResult.summary_rows`)."""
-    return result.summary_rows(scene, ranks=ranks)
+    """The (key, text) rows of the summary (:meth:`InstabilityResult.summary_rows`), its
+    messages' keyword hints spelt as this command's flags (--method enumerate)."""
+    return [(key, cli_spelling(text)) for key, text in result.summary_rows(scene, ranks=ranks)]
+
+
+def overrides(args) -> dict:
+    """The solver settings given on the command line (``--method``, ``--target``, ``--nev``)."""
+    return {name: getattr(args, name) for name in ("method", "target", "nev")
+            if getattr(args, name, None) is not None}
+
+
+def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=None, out=None) -> dict:
+    """The document ``meicp solve --json`` prints: the run (meicp version, scene, ranks, the
+    command line's overrides), the result keyed like its attributes
+    (:meth:`InstabilityResult.to_dict`; messages with this command's flags), the critical
+    friction (None when not asked; ``value`` None when none was found), the output files,
+    the wall-clock timings of this command and the versions of the stack."""
+    doc = {"format": "meicp-solve", "format_version": 1, "meicp_version": __version__,
+           "scene": {"path": str(args.scene), "title": scene.title, "nx": scene.nx, "ny": scene.ny,
+                     "dofs": scene.n_dofs},
+           "ranks": ranks, "overrides": overrides(args)}
+    data = result.to_dict()
+    for key in ("message", "evidence"):
+        data[key] = cli_spelling(data[key])
+    doc.update(data)
+    if mu_c is None:
+        doc["critical_friction"] = None
+    else:
+        record = critical_friction_record(mu_c, MU_C_EVIDENCE)
+        doc["critical_friction"] = {k: finite_or_none(v) if isinstance(v, float) else v for k, v in record.items()}
+    doc["output"] = None if out is None else {"directory": str(out), **{k: str(v) for k, v in (files or {}).items()}}
+    doc["wall"] = {k: finite_or_none(v) for k, v in (wall or {}).items()}
+    doc["versions"] = versions()
+    return doc
 
 
 def format_rows(rows) -> str:
@@ -142,25 +203,31 @@ def _run(args, comm, t0) -> int:
 
     log.info("analysis: started")
     t1 = time.perf_counter()
-    result = analyze(scene, comm=comm, scene_path=args.scene)
+    result = analyze(scene, comm=comm, scene_path=args.scene, **overrides(args))
     wall["analyze"] = time.perf_counter() - t1
     log.info(f"analysis: done in {seconds(wall['analyze'])} ({result.status})")
 
     rows = summary_rows(scene, result, ranks=comm.Get_size())
-    if args.critical_friction:
+    mu_c, files = None, {}
+    if args.critical_friction and not has_contact(scene):
+        rows.append(("μ_c", "not applicable: the scene has no contact, hence no friction"))
+    elif args.critical_friction:
         log.info("critical friction: μ as the eigenvalue at σ = 0, condensed onto the contact DOFs and enumerated")
         t3 = time.perf_counter()
-        mu_c = critical_friction(scene)  # serial and deterministic: every rank computes it alike
+        with stage("critical_friction"):
+            mu_c = critical_friction(scene)  # serial and deterministic: every rank computes it alike
         wall["critical_friction"] = time.perf_counter() - t3
-        rows.append(("μ_c", f"{mu_c:.10g}  (smallest μ with a σ = 0 divergence mode for these states; "
-                             "every support enumerated, certified)" if mu_c < float("inf") else "none up to μ = 1000"))
+        rows.append(("μ_c", f"{mu_c:.10g}  ({MU_C_EVIDENCE})" if mu_c < float("inf") else "none up to μ = 1000"))
     if out is not None:
         log.info(f"writing results to {out}/")
         t2 = time.perf_counter()
         try:
-            files = write_results(out, scene, result, comm=comm, scene_text=scene_text)
+            record = None if mu_c is None else critical_friction_record(mu_c, MU_C_EVIDENCE)
+            files = write_results(out, scene, result, comm=comm, scene_text=scene_text, critical_friction=record,
+                                  overrides=overrides(args))
         except BaseException:
-            rank0_print(format_rows(rows + [("outputs", "not written (error below)")]))
+            if not args.json:
+                rank0_print(format_rows(rows + [("outputs", "not written (error below)")]))
             raise
         wall["write"] = time.perf_counter() - t2
         log.info(f"writing: done in {seconds(wall['write'])}")
@@ -168,7 +235,11 @@ def _run(args, comm, t0) -> int:
         rows += [("", f"  {path.name:<14} {_DESCRIBE.get(key, '')}") for key, path in files.items()]
     wall["total"] = time.perf_counter() - t0
     rows.append(("wall", ", ".join(f"{k} {seconds(v)}" for k, v in wall.items())))
-    rank0_print(format_rows(rows))
+    if args.json:
+        doc = solve_json(args, scene, result, ranks=comm.Get_size(), mu_c=mu_c, files=files, wall=wall, out=out)
+        rank0_print(json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False))
+    else:
+        rank0_print(format_rows(rows))
     # every rank leaves together: mpirun aborts the job as soon as one rank exits non-zero,
     # which could cut rank 0's summary short after a failed (exit 1) analysis
     comm.Barrier()

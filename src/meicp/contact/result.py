@@ -50,6 +50,14 @@ class Mode:
         """Angular frequency ω = √−σ of an oscillating mode (σ < 0); 0 for σ ≥ 0."""
         return float(np.sqrt(max(-self.sigma, 0.0)))
 
+    def to_dict(self) -> dict:
+        """Everything but the shape ``x``, as JSON-ready values (NaN and ±inf as None)."""
+        return {"sigma": finite_or_none(self.sigma), "growth_rate": finite_or_none(self.growth_rate),
+                "frequency": finite_or_none(self.frequency), "residual": finite_or_none(self.residual),
+                "support": [int(i) for i in np.ravel(self.support)],
+                "interface_support": {str(k): [int(i) for i in np.ravel(v)]
+                                      for k, v in self.interface_support.items()}}
+
 
 @dataclass
 class InstabilityResult(Result):
@@ -92,6 +100,26 @@ class InstabilityResult(Result):
         if self.modal:
             return MODAL_VERDICT
         return {True: "STABLE", False: "UNSTABLE"}.get(self.stable, "UNDECIDED")
+
+    def to_dict(self) -> dict:
+        """The result as JSON-ready values, keyed like its attributes (``meicp solve --json``):
+        analysis, verdict, stable, status, success, message, evidence, modes (each
+        :meth:`Mode.to_dict`, no shapes), states, interface_states, sizes, timings, and the
+        static equilibrium's status when states were solved for."""
+        static = self.static
+        return {
+            "analysis": self.analysis, "verdict": self.verdict, "stable": self.stable,
+            "status": self.status, "success": self.success, "message": self.message,
+            "evidence": self.evidence, "iterations": int(self.iterations),
+            "modes": [m.to_dict() for m in self.modes],
+            "states": list(self.states),
+            "interface_states": {str(k): list(v) for k, v in self.interface_states.items()},
+            "sizes": {str(k): int(v) for k, v in self.sizes.items()},
+            "timings": {str(k): finite_or_none(v) for k, v in self.timings.items()},
+            "static": None if static is None else {
+                "status": getattr(static, "status", None), "success": bool(getattr(static, "success", False)),
+                "message": getattr(static, "message", "")},
+        }
 
     def summary(self) -> str:
         lines = [f"{self.verdict}: {self.evidence}"]
@@ -169,6 +197,12 @@ def _strip(states) -> str:
     if not states or len(states) > STRIP_MAX:
         return ""
     return "  [" + "".join(GLYPHS.get(s, "?") for s in states) + "]"
+
+
+def finite_or_none(value) -> float | None:
+    """A float for JSON: NaN and ±inf (not JSON) as None."""
+    value = float(value)
+    return value if np.isfinite(value) else None
 
 
 def seconds(t: float) -> str:

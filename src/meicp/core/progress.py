@@ -21,6 +21,8 @@ log = logging.getLogger("meicp")
 
 
 def _duration(seconds: float) -> str:
+    if seconds < 1:
+        return "under 1 s"
     if seconds < 60:
         return f"{seconds:.0f} s"
     if seconds < 3600:
@@ -69,5 +71,6 @@ class Progress:
         if self.work:
             fraction = (done if work_done is None else work_done) / self.work
         if fraction and 0 < fraction < 1:
-            text += f", about {_duration(elapsed * (1 - fraction) / fraction)} left"
+            left = _duration(elapsed * (1 - fraction) / fraction)
+            text += f", {left if left.startswith('under') else 'about ' + left} left"
         log.info(text + (f"; {detail}" if detail else ""))

@@ -16,6 +16,7 @@ HDF5 path                  shape, type            content
 ``/nodes/mass``            (n_nodes,) f8          lumped mass ρ a³
 ``/nodes/fixed``           (n_nodes, 3) f8        1 where a component is prescribed (Dirichlet)
 ``/nodes/contact``         (n_nodes,) i1          1 on the rigid base
+``/nodes/i``, ``/nodes/j`` (n_nodes,) i4          column i and row j (XDMF fields ``i``, ``j``)
 ``/fields/NAME``           (n_nodes, 3) f8        caller's per-DOF vectors, padded to 3 comps
                            or (n_nodes,) f8       caller's per-node scalars
 ``/materials/*``           (n_mat,)               name, kind, stiffness, density; and
@@ -24,7 +25,16 @@ HDF5 path                  shape, type            content
 =========================  =====================  ============================================
 
 Root attributes: ``format = "meicp-lattice"``, ``format_version``, ``nx, ny, spacing, shear,
-n_nodes, n_dofs, n_bonds``, ``meicp_version``.
+n_nodes, n_dofs, n_bonds``, ``meicp_version``, ``units_convention``.
+
+Every dataset carries CF-style ``long_name`` and ``units`` attributes.  The model is
+dimensionless: meicp attaches no unit to any number, so ``units`` is ``"1"`` everywhere and
+the numbers are in whatever consistent system the scene's are (lengths in the unit of
+``lattice.spacing``, stiffness and density as given; ``long_name`` names the dimension where
+there is one).  Coded fields carry their legend as CF ``flag_values`` / ``flag_meanings``
+and as a ``legend`` sentence (``bonds/kind``, ``bonds/interface``, ``nodes/contact`` and a
+caller's coded fields such as ``contact_state``); the XDMF file repeats the legends in a
+comment at its top, for ParaView users.
 
 Under MPI (collective on ``comm``) each rank contributes its band of node rows and the
 bonds stored from them; with an MPI-enabled h5py the ranks write their slices collectively
@@ -53,7 +63,47 @@ FORMAT = "meicp-lattice"
 FORMAT_VERSION = 1
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]*$")
 #: names of /nodes/* and /bonds/* attributes in the XDMF file, not available to fields
-_RESERVED = ("material", "mass", "fixed", "contact", "bond_kind", "bond_stiffness", "bond_interface")
+_RESERVED = ("material", "mass", "fixed", "contact", "i", "j", "bond_kind", "bond_stiffness", "bond_interface")
+#: the statement every meicp file carries about units (see the module docstring)
+UNITS_CONVENTION = ("dimensionless: meicp attaches no unit to any number; every value is in the consistent "
+                    "system of units the scene's numbers are in (lengths in the unit of lattice.spacing, "
+                    "stiffness and density as given), and units = \"1\" on every dataset says so")
+
+
+def coded(meanings, values=None, **more) -> dict:
+    """CF attributes of a coded dataset: ``flag_values``, ``flag_meanings`` (one word each)
+    and a ``legend`` sentence ("0 horizontal, 1 vertical, ...")."""
+    values = list(range(len(meanings))) if values is None else list(values)
+    return {"flag_values": np.array(values, dtype=np.int32), "flag_meanings": " ".join(meanings),
+            "legend": ", ".join(f"{v} {m}" for v, m in zip(values, meanings)), **more}
+
+
+#: CF-style attributes of the lattice's own datasets
+DESCRIPTIONS = {
+    "geometry/points": {"long_name": "reference position (x, y, z = 0) of each node (length)"},
+    "geometry/ij": {"long_name": "column i and row j of each node"},
+    "bonds/connectivity": {"long_name": "node numbers j*nx + i of the two ends of each bond"},
+    "bonds/kind": coded(BOND_KINDS, long_name="bond direction kind"),
+    "bonds/stiffness": {"long_name": "bond stiffness k (force per length)"},
+    "bonds/interface": coded(("inside_one_material", "joins_two_materials"), long_name="bond joins two materials"),
+    "nodes/material": {"long_name": "index of each node's material into /materials"},
+    "nodes/mass": {"long_name": "lumped mass rho a^3 of each node, both DOFs (mass)"},
+    "nodes/fixed": {"long_name": "1 where a displacement component is prescribed (Dirichlet), per x, y, z"},
+    "nodes/contact": coded(("not_on_the_base", "on_the_rigid_base"), long_name="node on the rigid base"),
+    "nodes/i": {"long_name": "column i of each node (0 left)"},
+    "nodes/j": {"long_name": "row j of each node (0 bottom)"},
+    "materials/name": {"long_name": "material name"},
+    "materials/kind": {"long_name": "material kind (layer or embedded band)"},
+    "materials/stiffness": {"long_name": "bond stiffness inside each material (force per length)"},
+    "materials/density": {"long_name": "density of each material (mass per length^3)"},
+    "materials/interface_stiffness": {"long_name": "stiffness of a bond joining two materials (force per length)"},
+}
+
+
+def _describe(dset, attrs: dict | None) -> None:
+    """Write ``attrs`` (default: a bare ``units``) and ``units = "1"`` on a dataset."""
+    for key, value in {"units": "1", **(attrs or {})}.items():
+        dset.attrs[key] = value
 
 
 @dataclass(frozen=True)
@@ -123,6 +173,8 @@ def _band_data(model: LatticeModel, j0: int, j1: int) -> dict:
         "nodes/mass": model.mass_per_material[mat],
         "nodes/fixed": fixed,
         "nodes/contact": contact,
+        "nodes/i": ii.astype(np.int32),
+        "nodes/j": jj.astype(np.int32),
         "bonds/connectivity": ends.astype(np.int64),
         "bonds/kind": kinds.astype(np.int8),
         "bonds/stiffness": ks.astype(float),
@@ -144,7 +196,7 @@ def _attrs(model: LatticeModel, n_bonds: int) -> dict:
     return {"format": FORMAT, "format_version": FORMAT_VERSION, "nx": model.nx, "ny": model.ny,
             "spacing": model.spacing, "shear": model.shear, "n_nodes": model.n_nodes,
             "n_dofs": model.n_dofs, "n_bonds": n_bonds, "meicp_version": __version__,
-            "bond_kinds": ",".join(BOND_KINDS)}
+            "bond_kinds": ",".join(BOND_KINDS), "units_convention": UNITS_CONVENTION}
 
 
 def _scene_text(model: LatticeModel, scene_text):
@@ -160,13 +212,16 @@ def _scene_text(model: LatticeModel, scene_text):
 
 
 def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
-                  scene_text: str | None = None, parallel_io: str = "auto") -> LatticeFiles:
+                  scene_text: str | None = None, parallel_io: str = "auto",
+                  field_attrs: dict | None = None) -> LatticeFiles:
     """Write ``path`` (HDF5) and the XDMF file next to it (same stem, ``.xdmf``).
 
     ``scene``: a Scene, a LatticeModel or a scene path.  ``fields``: name → per-DOF vector
     (length n_dofs, natural numbering; written as 3-component node vectors) or per-node
     scalar (length n_nodes) as a NumPy array holding the whole field (on every rank), or a
-    PETSc Vec distributed like the matrices of ``assemble(scene, comm)``.  Collective on
+    PETSc Vec distributed like the matrices of ``assemble(scene, comm)``.  ``field_attrs``:
+    name → attributes of that field's dataset (``long_name``, a legend from :func:`coded`;
+    ``units = "1"`` is added to every one).  Collective on
     ``comm`` (mpi4py or PETSc communicator; ``None`` = this process alone).  ``parallel_io``:
     ``"auto"`` (collective when h5py has MPI, else gathered), ``"collective"`` or ``"gather"``
     (rank 0 writes everything).  Raises :class:`ProblemError` before any file is written.
@@ -212,8 +267,10 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
 
     text = _scene_text(model, scene_text)
     data = _band_data(model, j0, j1)
+    attrs = dict(DESCRIPTIONS)
     for name, arr in local_fields.items():
         data[f"fields/{name}"] = arr
+        attrs[f"fields/{name}"] = dict((field_attrs or {}).get(name) or {"long_name": name})
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     if mcomm is not None:
         tmp = Path(mcomm.bcast(str(tmp), root=0))
@@ -224,11 +281,11 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
     try:
         if mcomm is None:
             n_bonds = data["bonds/connectivity"].shape[0]
-            _write_serial(h5py, tmp, data, _materials(model), _attrs(model, n_bonds), text)
+            _write_serial(h5py, tmp, data, _materials(model), _attrs(model, n_bonds), text, attrs)
         elif collective:
-            n_bonds = _write_collective(h5py, mcomm, tmp, data, model, text)
+            n_bonds = _write_collective(h5py, mcomm, tmp, data, model, text, attrs)
         else:
-            n_bonds = _write_gathered(h5py, mcomm, tmp, data, model, text)
+            n_bonds = _write_gathered(h5py, mcomm, tmp, data, model, text, attrs)
     except BaseException:
         if rank == 0 and tmp.exists():
             tmp.unlink()
@@ -240,34 +297,35 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
         os.replace(tmp, path)
         shapes = {name: arr.shape[1:] for name, arr in data.items()}
         xtmp = xdmf.with_name(f".{xdmf.name}.{os.getpid()}.tmp")
+        legends = {_xdmf_name(name): a["legend"] for name, a in attrs.items() if "legend" in a and name in data}
         xtmp.write_text(xdmf_text(path.name, model.n_nodes, n_bonds, shapes,
-                                  {name: arr.dtype for name, arr in data.items()}), encoding="utf-8")
+                                  {name: arr.dtype for name, arr in data.items()}, legends), encoding="utf-8")
         os.replace(xtmp, xdmf)
     if mcomm is not None:
         mcomm.Barrier()
     return LatticeFiles(path, xdmf)
 
 
-def _write_serial(h5py, path, data, materials, attrs, text):
+def _write_serial(h5py, path, data, materials, attrs, text, described):
     with h5py.File(path, "w") as f:
         for k, v in attrs.items():
             f.attrs[k] = v
         for name, arr in {**data, **materials}.items():
-            f.create_dataset(name, data=arr)
+            _describe(f.create_dataset(name, data=arr), described.get(name))
         if text is not None:
-            f.create_dataset("scene", data=np.bytes_(text.encode()))
+            _describe(f.create_dataset("scene", data=np.bytes_(text.encode())), {"long_name": "scene file (TOML)"})
 
 
-def _write_gathered(h5py, comm, path, data, model, text) -> int:
+def _write_gathered(h5py, comm, path, data, model, text, described) -> int:
     parts = {name: comm.gather(arr, root=0) for name, arr in sorted(data.items())}
     n_bonds = comm.allreduce(data["bonds/connectivity"].shape[0])
     if comm.Get_rank() == 0:
         full = {name: np.concatenate(p, axis=0) for name, p in parts.items()}
-        _write_serial(h5py, path, full, _materials(model), _attrs(model, n_bonds), text)
+        _write_serial(h5py, path, full, _materials(model), _attrs(model, n_bonds), text, described)
     return n_bonds
 
 
-def _write_collective(h5py, comm, path, data, model, text) -> int:
+def _write_collective(h5py, comm, path, data, model, text, described) -> int:
     counts = {name: comm.allgather(arr.shape[0]) for name, arr in sorted(data.items())}
     rank = comm.Get_rank()
     n_bonds = sum(counts["bonds/connectivity"])
@@ -280,13 +338,16 @@ def _write_collective(h5py, comm, path, data, model, text) -> int:
             c = counts[name]
             dset = f.create_dataset(name, shape=(sum(c),) + arr.shape[1:], dtype=arr.dtype)
             _write_rows(h5py, dset, sum(c[:rank]), arr, dxpl)
+            _describe(dset, described.get(name))  # collective: the same attributes on every rank
         for name, arr in _materials(model).items():
             dset = f.create_dataset(name, shape=arr.shape, dtype=arr.dtype)
+            _describe(dset, described.get(name))
             if rank == 0:
                 dset[...] = arr
         if text is not None:
             raw = np.bytes_(text.encode())
             dset = f.create_dataset("scene", shape=(), dtype=raw.dtype)
+            _describe(dset, {"long_name": "scene file (TOML)"})
             if rank == 0:
                 dset[()] = raw
     return n_bonds
@@ -319,9 +380,27 @@ def _item(h5name: str, dataset: str, dims: tuple, dtype) -> str:
             f'Format="HDF">{h5name}:/{dataset}</DataItem>')
 
 
-def xdmf_text(h5name: str, n_nodes: int, n_bonds: int, shapes: dict, dtypes: dict) -> str:
-    """XDMF 3 for ParaView: points, bonds as 2-node line cells, node and cell attributes."""
-    lines = ['<?xml version="1.0" ?>',
+def _xdmf_name(dataset: str) -> str:
+    """The XDMF attribute name of a dataset: ``fields/mode_0`` → ``mode_0``, ``bonds/kind`` →
+    ``bond_kind``."""
+    group, _, short = dataset.partition("/")
+    return f"bond_{short}" if group == "bonds" else short
+
+
+def xdmf_text(h5name: str, n_nodes: int, n_bonds: int, shapes: dict, dtypes: dict,
+              legends: dict | None = None) -> str:
+    """XDMF 3 for ParaView: points, bonds as 2-node line cells, node and cell attributes;
+    ``legends`` (attribute name → its code legend) go into a comment at the top (XDMF has no
+    place for them that every reader accepts; the HDF5 datasets carry them as attributes)."""
+    head = ""
+    if legends:
+        width = max(len(k) for k in legends)
+        # "--" may not appear inside an XML comment
+        legends = {name: text.replace("--", "- -") for name, text in legends.items()}
+        head = "\n".join(["<!-- meicp lattice: codes of the coded fields (also attributes of their HDF5 datasets)"]
+                         + [f"     {name:<{width}}  {text}" for name, text in sorted(legends.items())]
+                         + ["     units: none attached, the scene's consistent system (units_convention) -->"])
+    lines = ['<?xml version="1.0" ?>'] + ([head] if head else []) + [
              '<Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">',
              '  <Domain>',
              '    <Grid Name="lattice" GridType="Uniform">',
@@ -338,7 +417,7 @@ def xdmf_text(h5name: str, n_nodes: int, n_bonds: int, shapes: dict, dtypes: dic
         center, n = ("Cell", n_bonds) if group == "bonds" else ("Node", n_nodes)
         shape = (n,) + tuple(shapes[name])
         kind = "Vector" if len(shape) == 2 and shape[1] == 3 else "Scalar"
-        label = short if group != "bonds" else f"bond_{short}"
+        label = _xdmf_name(name)
         lines += [f'      <Attribute Name="{label}" AttributeType="{kind}" Center="{center}">',
                   '        ' + _item(h5name, name, shape, dtypes[name]),
                   '      </Attribute>']

@@ -5,7 +5,9 @@ In the output directory::
     results.h5      the scene, versions, contact states and forces, modes, verdict (below)
     lattice.h5      the lattice (:func:`~meicp.io.lattice_output.write_lattice`) with node
     lattice.xdmf    fields ``mode_0``, ``mode_1``... (each scaled as in the PNG),
-                    ``contact_state`` and ``static_u`` (the static displacement, when solved):
+                    ``contact_state`` (codes below), the node indices ``i`` and ``j``, and,
+                    when the static equilibrium was solved, ``static_u`` (its displacement)
+                    and the contact reactions ``r_n``, ``r_t`` (NaN off the contact nodes):
                     open the .xdmf in ParaView, Warp By Vector with ``mode_k`` (scale 1 = the
                     PNG's picture)
     mode.png        the fastest mode on the deformed lattice (or the "stable" lattice)
@@ -17,9 +19,11 @@ In the output directory::
 ``/`` attributes                   ``format = "meicp-results"``, ``format_version``,
                                    ``meicp_version``, ``title``, ``source``, ``created``,
                                    ``status``, ``success``, ``message``, ``iterations``,
-                                   ``residual``, ``verdict`` (stable | unstable | undecided),
-                                   ``stable`` (1 | 0 | -1 for undecided), ``evidence``,
-                                   ``n_modes``, ``ranks``
+                                   ``residual``, ``analysis`` (instability | modal: a scene
+                                   without contact), ``verdict`` (stable | unstable |
+                                   undecided | no contact), ``stable`` (1 | 0 | -1 for
+                                   undecided), ``evidence``, ``n_modes``, ``ranks``,
+                                   ``units_convention``
 ``/scene``                         the scene as TOML text (the file's own text when known,
                                    else regenerated from the parsed scene)
 ``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
@@ -37,14 +41,26 @@ In the output directory::
                                    static result holds them), ``interfaces/<below>/r_n``...,
                                    ``u`` (n_dofs,); attributes status, success, message,
                                    equilibrium_residual, guarantees, notes...
-``/modes``                         ``sigma`` (m,), ``growth_rate`` (m,), ``residual`` (m,),
+``/modes``                         ``sigma`` (m,), ``growth_rate`` (m,), ``frequency`` (m,)
+                                   (ω = √−σ of a vibration mode), ``residual`` (m,),
                                    ``display_scale`` (m,), ``x`` (m, n_dofs) natural numbering
 ``/modes/mode_<k>``                ``support`` (base columns, i8), ``interface_support/<below>``;
                                    attributes sigma, growth_rate, residual, display_scale
 ``/certificates``                  ``mode_residual`` (m,); attributes ``result_residual``,
                                    ``max_mode_residual``, ``eicp_method``, ``eicp_status``,
                                    ``eicp_message``, ``eicp_coverage`` (JSON)
+``/critical_friction`` (when       attributes ``value`` (inf: none found), ``found``, and
+computed)                          ``lower``, ``upper``, ``exact``, ``evidence`` as far as
+                                   known (:func:`critical_friction_record`)
+``/overrides``                     attributes: the solver settings given on the command
+                                   line (``method``, ``target``, ``nev``), over the scene's
 =================================  ==========================================================
+
+Every dataset carries CF-style ``long_name`` and ``units`` attributes; the model is
+dimensionless (``units = "1"``, the numbers in the scene's consistent system: see
+:mod:`meicp.io.lattice_output`), and the code datasets carry their legend as
+``flag_values`` / ``flag_meanings`` / ``legend``.  Later sections (flutter) are added as
+groups beside ``/modes``; readers ignore what they do not know.
 
 Contact state codes (``/contact/*/code`` and the XDMF field ``contact_state``): 0 not a
 contact node, 1 stick, 2 slip+, 3 slip-, 4 separated, 5 grazing, -1 contact node whose state
@@ -76,9 +92,10 @@ from ..core.errors import MeicpError, ProblemError
 from ..info import collect
 from ..lattice.assembly import as_model
 from ..petsc.comm import mpi_comm
+from ..petsc.stages import stage as log_stage
 from ..plotting import lattice as plotting
 from ..scene import STATES, Scene
-from .lattice_output import write_lattice
+from .lattice_output import UNITS_CONVENTION, coded, write_lattice
 
 FORMAT = "meicp-results"
 FORMAT_VERSION = 1
@@ -86,6 +103,49 @@ FORMAT_VERSION = 1
 STATE_CODES = {s: k for k, s in enumerate(STATES, start=1)}
 CODE_LEGEND = "0 not a contact node, " + ", ".join(f"{k} {s}" for s, k in STATE_CODES.items()) \
     + ", -1 unknown"
+#: CF attributes of a contact state code (``/contact/*/code``, the XDMF field ``contact_state``)
+STATE_FLAGS = coded(("not_a_contact_node",) + STATES + ("unknown",), [0, *STATE_CODES.values(), -1],
+                    long_name="contact state code")
+#: CF-style attributes of results.h5's datasets, by (top group, dataset name)
+DESCRIPTIONS = {
+    ("modes", "sigma"): {"long_name": "sigma = lambda^2 of each mode: a divergence mode grows as exp(sqrt(sigma) t), "
+                                      "a vibration mode has sigma = -omega^2 (1/time^2)"},
+    ("modes", "growth_rate"): {"long_name": "growth rate lambda = sqrt(sigma), 0 when sigma < 0 (1/time)"},
+    ("modes", "frequency"): {"long_name": "angular frequency omega = sqrt(-sigma), 0 when sigma >= 0 (1/time)"},
+    ("modes", "residual"): {"long_name": "certificate residual of each mode, relative to the pencil's scale"},
+    ("modes", "display_scale"): {"long_name": "factor that scales x to the picture of mode.png"},
+    ("modes", "x"): {"long_name": "mode shape in natural DOF numbering (2n: x, 2n+1: y of node n = j*nx + i), "
+                                  "unit 2-norm"},
+    ("modes", "support"): {"long_name": "columns of the base contacts whose slip is active"},
+    ("modes", "interface_support"): {"long_name": "columns of the interface's contacts whose slip is active"},
+    ("contact", "states"): {"long_name": "contact state of each column, left to right"},
+    ("contact", "code"): STATE_FLAGS,
+    ("contact", "nodes"): {"long_name": "node number j*nx + i of each base contact"},
+    ("contact", "lower_nodes"): {"long_name": "node number of the lower side of each interface contact"},
+    ("contact", "upper_nodes"): {"long_name": "node number of the upper side of each interface contact"},
+    ("static", "r_n"): {"long_name": "normal contact reaction r_n >= 0 (force)"},
+    ("static", "r_t"): {"long_name": "tangential contact reaction r_t, |r_t| <= mu r_n (force)"},
+    ("static", "gap"): {"long_name": "normal gap g >= 0 (length)"},
+    ("static", "slip"): {"long_name": "tangential slip (length)"},
+    ("static", "held"): {"long_name": "1 where the boundary holds the contact node"},
+    ("static", "u"): {"long_name": "static displacement in natural DOF numbering (length)"},
+    ("certificates", "mode_residual"): {"long_name": "certificate residual of each mode"},
+    ("", "scene"): {"long_name": "scene file (TOML)"},
+    ("scene_summary", "name"): {"long_name": "name"},
+    ("scene_summary", "rows"): {"long_name": "node rows of each layer"},
+    ("scene_summary", "stiffness"): {"long_name": "bond stiffness (force per length)"},
+    ("scene_summary", "density"): {"long_name": "density (mass per length^3)"},
+    ("scene_summary", "below"): {"long_name": "the layer below each interface"},
+    ("scene_summary", "kind"): {"long_name": "interface kind (bonded | frictional)"},
+    ("scene_summary", "friction"): {"long_name": "Coulomb friction coefficient mu (NaN: bonded)"},
+}
+#: CF-style attributes of the XDMF fields results.h5's writer adds to lattice.h5
+FIELD_DESCRIPTIONS = {
+    "contact_state": STATE_FLAGS,
+    "static_u": {"long_name": "static displacement (length)"},
+    "r_n": {"long_name": "normal contact reaction r_n >= 0 of the static equilibrium (force), NaN off contacts"},
+    "r_t": {"long_name": "tangential contact reaction r_t of the static equilibrium (force), NaN off contacts"},
+}
 #: file names inside the output directory (keys of the returned dict)
 FILES = {"results": "results.h5", "lattice": "lattice.h5", "xdmf": "lattice.xdmf",
          "mode_png": "mode.png", "contacts_png": "contacts.png"}
@@ -110,6 +170,21 @@ def versions() -> dict:
     except ImportError:  # pragma: no cover
         pass
     return {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in out.items()}
+
+
+def critical_friction_record(mu, evidence: str | None = None) -> dict:
+    """The critical friction as results.h5 and ``meicp solve --json`` store it: ``value``
+    (inf when no μ up to the search's bound gives a mode), ``found``, and ``lower``,
+    ``upper``, ``exact``, ``evidence`` as far as the number carries them (a float subclass
+    with a certified bracket); ``evidence`` stands in when it carries none.  Unknown: None."""
+    value = float(mu)
+    record = {"value": value, "found": math.isfinite(value)}
+    for name in ("lower", "upper", "exact", "evidence"):
+        item = getattr(mu, name, None)
+        record[name] = float(item) if isinstance(item, (float, np.floating)) else item
+    if record["evidence"] is None:
+        record["evidence"] = evidence
+    return record
 
 
 def _toml_value(v) -> str:
@@ -263,7 +338,8 @@ def _prepare(scene: Scene, result) -> dict:
                 raise ProblemError(f"mode {k}: interface_support[{name!r}]: no frictional "
                                    f"interface above a layer {name!r}")
             isup[name] = _columns(f"mode {k}: interface_support[{name!r}]", sup, nx)
-        modes.append({"mode": m, "sigma": sigma, "growth_rate": float(m.growth_rate), "x": x,
+        frequency = float(np.sqrt(max(-sigma, 0.0)))
+        modes.append({"mode": m, "sigma": sigma, "growth_rate": float(m.growth_rate), "frequency": frequency, "x": x,
                       "support": support, "interface_support": isup,
                       "residual": float(getattr(m, "residual", float("nan")))})
     static = getattr(result, "static", None)
@@ -291,8 +367,19 @@ def _prepare(scene: Scene, result) -> dict:
         code[upper] = c
         if lower is not None:
             code[lower] = c
+    # per-node contact reactions, for the XDMF file: both nodes of an interface column carry it
+    node_forces = {}
+    for key, _, _, upper, lower in lines:
+        src = forces if key == "base" else iforces.get(key, {})
+        for name in ("r_n", "r_t"):
+            arr = src.get(name)
+            if arr is not None and arr.ndim == 1 and arr.size == nx:
+                field = node_forces.setdefault(name, np.full(scene.n_nodes, np.nan))
+                field[upper] = arr
+                if lower is not None:
+                    field[lower] = arr
     return {"lines": lines, "states": states, "modes": modes, "static": static, "forces": forces,
-            "interface_forces": iforces, "static_u": static_u, "code": code}
+            "interface_forces": iforces, "static_u": static_u, "code": code, "node_forces": node_forces}
 
 
 def _numeric(name: str, value) -> np.ndarray:
@@ -342,10 +429,24 @@ def _strings(values, width: int = 16) -> np.ndarray:
     return np.array([str(v).encode() for v in values], dtype=f"S{width}")
 
 
+def _describe(f) -> None:
+    """CF-style ``units`` and ``long_name`` (and code legends) on every dataset of results.h5."""
+    def visit(name, obj):
+        if not hasattr(obj, "shape"):
+            return
+        parts = name.split("/")
+        leaf = "interface_support" if "interface_support" in parts else parts[-1]
+        attrs = DESCRIPTIONS.get((parts[0] if len(parts) > 1 else "", leaf), {"long_name": leaf})
+        for key, value in {"units": "1", **attrs}.items():
+            obj.attrs[key] = value
+    f.visititems(visit)
+
+
 def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, vers: dict,
-              scales: list, ranks: int) -> None:
+              scales: list, ranks: int, mu_c=None, overrides: dict | None = None) -> None:
     stable = getattr(result, "stable", None)
-    verdict = {True: "stable", False: "unstable"}.get(stable, "undecided")
+    analysis = getattr(result, "analysis", "instability")
+    verdict = "no contact" if analysis == "modal" else {True: "stable", False: "unstable"}.get(stable, "undecided")
     modes = prep["modes"]
     with h5py.File(path, "w") as f:
         _set_attrs(f, {
@@ -356,7 +457,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "message": getattr(result, "message", ""), "iterations": getattr(result, "iterations", 0),
             "residual": getattr(result, "residual", float("nan")), "verdict": verdict,
             "stable": {True: 1, False: 0}.get(stable, -1), "evidence": getattr(result, "evidence", ""),
-            "n_modes": len(modes), "ranks": ranks})
+            "n_modes": len(modes), "ranks": ranks, "analysis": analysis, "units_convention": UNITS_CONVENTION})
         f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
 
         g = f.create_group("scene_summary")
@@ -424,6 +525,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         n = scene.n_dofs
         g.create_dataset("sigma", data=np.array([m["sigma"] for m in modes], dtype=float))
         g.create_dataset("growth_rate", data=np.array([m["growth_rate"] for m in modes], dtype=float))
+        g.create_dataset("frequency", data=np.array([m["frequency"] for m in modes], dtype=float))
         g.create_dataset("residual", data=np.array([m["residual"] for m in modes], dtype=float))
         g.create_dataset("display_scale", data=np.array(scales, dtype=float))
         X = np.stack([m["x"] for m in modes]) if modes else np.zeros((0, n))
@@ -455,11 +557,18 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "eicp_coverage": (json.dumps(coverage[0] if len(coverage) == 1 else coverage, default=str)
                               if any(coverage) else None)})
 
+        if mu_c is not None:  # a number (perhaps carrying its bracket), or its record already
+            record = mu_c if isinstance(mu_c, dict) else critical_friction_record(mu_c)
+            _set_attrs(f.create_group("critical_friction"), record)
+        if overrides:
+            _set_attrs(f.create_group("overrides"), overrides)
+        _describe(f)
+
 
 # --------------------------------------------------------------------------- the whole set
 
 def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: dict, ranks: int,
-               max_xdmf_modes: int, plots: bool) -> dict:
+               max_xdmf_modes: int, plots: bool, mu_c=None, overrides=None) -> dict:
     import h5py
 
     model = as_model(scene)
@@ -467,14 +576,19 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
     scales = [plotting.display_scale(model, m["x"]) for m in modes]
     written = {}
 
-    _write_h5(h5py, stage / FILES["results"], scene, result, prep, text, vers, scales, ranks)
+    _write_h5(h5py, stage / FILES["results"], scene, result, prep, text, vers, scales, ranks, mu_c, overrides)
     written["results"] = FILES["results"]
 
     fields = {f"mode_{k}": scales[k] * m["x"] for k, m in enumerate(modes[:max_xdmf_modes])}
+    described = {f"mode_{k}": {"long_name": f"shape of mode {k} (sigma = {m['sigma']:.10g}) times its display "
+                                            f"scale {scales[k]:.6g}"} for k, m in enumerate(modes[:max_xdmf_modes])}
     fields["contact_state"] = prep["code"]
     if prep["static_u"] is not None:
         fields["static_u"] = prep["static_u"]
-    files = write_lattice(stage / FILES["lattice"], model, fields=fields, comm=None, scene_text=text)
+    fields.update(prep["node_forces"])
+    described.update(FIELD_DESCRIPTIONS)
+    files = write_lattice(stage / FILES["lattice"], model, fields=fields, comm=None, scene_text=text,
+                          field_attrs=described)
     written["lattice"], written["xdmf"] = files.h5.name, files.xdmf.name
 
     if plots:
@@ -502,7 +616,8 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
 
 
 def write_results(directory, scene, result, *, comm=None, scene_text: str | None = None,
-                  max_xdmf_modes: int = 16, plots: bool = True) -> dict:
+                  max_xdmf_modes: int = 16, plots: bool = True, critical_friction=None,
+                  overrides: dict | None = None) -> dict:
     """Write the outputs of an instability analysis to ``directory`` (created if missing).
 
     ``scene``: the :class:`Scene` analysed; ``result``: its
@@ -510,6 +625,9 @@ def write_results(directory, scene, result, *, comm=None, scene_text: str | None
     numbering, the same on every rank).  ``scene_text``: the scene file's text (default: read
     from ``scene.source``, else regenerated).  ``max_xdmf_modes``: how many modes become
     XDMF fields (all of them go to ``results.h5``).  ``plots``: write the PNGs.
+    ``critical_friction``: μ_c when computed (a float, a float carrying its bracket, or its
+    :func:`critical_friction_record`), stored in ``/critical_friction``.  ``overrides``: the
+    solver settings the command line gave over the scene's, stored in ``/overrides``.
 
     Returns ``{"results", "lattice", "xdmf", "mode_png", "contacts_png"}`` → Path (the PNG
     keys only when written).  Collective on ``comm``: rank 0 writes, every rank returns the
@@ -524,8 +642,9 @@ def write_results(directory, scene, result, *, comm=None, scene_text: str | None
     error = None
     if rank == 0:
         try:
-            outcome = ("ok", _write_rank0(directory, scene, result, scene_text, vers, size,
-                                          max_xdmf_modes, plots))
+            with log_stage("write"):
+                outcome = ("ok", _write_rank0(directory, scene, result, scene_text, vers, size,
+                                              max_xdmf_modes, plots, critical_friction, overrides))
         except BaseException as exc:  # noqa: BLE001 - re-raised below, after telling the others
             error = exc
             outcome = ("ProblemError" if isinstance(exc, ProblemError) else "error",
@@ -542,7 +661,8 @@ def write_results(directory, scene, result, *, comm=None, scene_text: str | None
     return {key: directory / name for key, name in payload.items()}
 
 
-def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xdmf_modes, plots) -> dict:
+def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xdmf_modes, plots,
+                 mu_c=None, overrides=None) -> dict:
     prep = _prepare(scene, result)  # every check before the disk is touched
     text = _scene_text(scene, scene_text)
     created = None  # the topmost directory this call creates, removed again on error
@@ -560,7 +680,8 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
     stage = directory / f".meicp-results.{os.getpid()}.tmp"
     try:
         stage.mkdir()
-        written = _write_all(stage, scene, result, prep, text, vers, ranks, max_xdmf_modes, plots)
+        written = _write_all(stage, scene, result, prep, text, vers, ranks, max_xdmf_modes, plots, mu_c,
+                             overrides)
         # data first, the XDMF (which points at lattice.h5) after it, results.h5 last
         order = [k for k in ("lattice", "xdmf", "mode_png", "contacts_png", "results") if k in written]
         for key in order:
