@@ -1,3 +1,4 @@
+import logging
 import os
 import subprocess
 import sys
@@ -28,6 +29,25 @@ def meicp_cmd() -> list:
 
 def mpirun(n: int = 2) -> list:
     return ["mpirun", "-n", str(n), "--oversubscribe"]
+
+
+@pytest.fixture
+def cli(capsys):
+    """``meicp ARGS`` in this process: (exit code, stdout, stderr), the logger restored after.
+    Not for PETSc options (after ``--``): they would stay in this process's database."""
+    from meicp.cli.main import main
+
+    logger = logging.getLogger("meicp")
+    level, handlers = logger.level, list(logger.handlers)
+
+    def call(*args):
+        code = main([str(a) for a in args])
+        out, err = capsys.readouterr()
+        return code, out, err
+
+    yield call
+    logger.setLevel(level)
+    logger.handlers[:] = handlers
 
 
 @pytest.fixture

@@ -13,29 +13,12 @@ import pytest
 
 import meicp
 from meicp.cli.exit import MEANING, Exit
-from meicp.cli.main import build_parser, main
+from meicp.cli.main import build_parser
 from meicp.petsc.options import PREFIXES
 
 from .conftest import ROOT, meicp_cmd, mpirun, run
 
 SCENES = ROOT / "data" / "scenes"
-
-
-@pytest.fixture
-def cli(capsys):
-    """``meicp ARGS`` in this process (no PETSc options: those stay in the database):
-    (exit code, stdout, stderr); the logger as it was."""
-    logger = logging.getLogger("meicp")
-    level, handlers = logger.level, list(logger.handlers)
-
-    def call(*args):
-        code = main([str(a) for a in args])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    yield call
-    logger.setLevel(level)
-    logger.handlers[:] = handlers
 
 
 def test_version_exits_0():

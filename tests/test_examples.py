@@ -3,14 +3,12 @@ with the command data/scenes/README.md names for it (as scikit-fem runs its exam
 
 import contextlib
 import io
-import logging
 import re
 
 import pytest
 
 import meicp
 from meicp.cli.exit import Exit
-from meicp.cli.main import main
 
 from .conftest import ROOT
 
@@ -26,22 +24,6 @@ def _scene_table() -> dict:
 
 
 TABLE = _scene_table()
-
-
-@pytest.fixture
-def cli(capsys):
-    """``meicp ARGS`` in this process: (exit code, stdout, stderr); the logger as it was."""
-    logger = logging.getLogger("meicp")
-    level, handlers = logger.level, list(logger.handlers)
-
-    def run(*args):
-        code = main([str(a) for a in args])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    yield run
-    logger.setLevel(level)
-    logger.handlers[:] = handlers
 
 
 def test_every_shipped_scene_is_listed_with_its_command():
