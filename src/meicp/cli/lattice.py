@@ -14,6 +14,7 @@ from ..io.scene import load_scene
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..petsc.mat import destroying, diagonal, nonzeros
+from ..petsc.stages import stage
 from ..plotting.lattice import plot_lattice
 from .arguments import verbosity
 from .exit import Exit
@@ -60,7 +61,8 @@ def run(args) -> int:
     if not args.no_assemble:
         comm.Barrier()
         t0 = time.perf_counter()
-        matrices = assemble(scene, comm)
+        with stage("assemble"):
+            matrices = assemble(scene, comm)
         comm.Barrier()
         dt = time.perf_counter() - t0
         K = matrices[0]
@@ -70,7 +72,7 @@ def run(args) -> int:
                     f"M: lumped, total mass {model.total_mass():.6g}; assembled in {dt:.3f} s "
                     f"on {comm.Get_size()} rank(s)")
         fields["K_diagonal"] = diagonal(K)
-    with destroying(*fields.values(), *matrices):
+    with destroying(*fields.values(), *matrices), stage("write"):
         files = write_lattice(out / f"{stem}.h5", model, fields=fields, comm=comm)
     rank0_print(f"wrote {files.h5}")
     rank0_print(f"wrote {files.xdmf}  (open it in ParaView)")
