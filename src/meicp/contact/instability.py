@@ -75,7 +75,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     comm = mpi_comm(comm)
     model = LatticeModel(scene)
     if not has_contact(scene):  # no friction: no instability to decide, its vibration modes instead
-        return modal_analysis(scene, model, comm, nev=solver_options.get("nev"), options=solver_options.get("options"))
+        return modal_analysis(scene, model, comm, nev=solver_options.get("nev"),
+                              options=solver_options.get("options"))
     result = InstabilityResult()
     # -- states ---------------------------------------------------------------------------
     t0 = time.perf_counter()
