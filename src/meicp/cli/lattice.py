@@ -12,7 +12,9 @@ from ..core.log import rank0_print
 from ..io.lattice_output import write_lattice
 from ..io.scene import load_scene
 from ..lattice.model import LatticeModel
+from ..lattice.size import check_size
 from ..petsc.assembly import assemble
+from ..petsc.comm import available_memory_on, index_max
 from ..petsc.mat import destroying, diagonal, nonzeros
 from ..petsc.stages import stage
 from ..plotting.lattice import plot_lattice
@@ -49,6 +51,9 @@ def run(args) -> int:
 
     comm = MPI.COMM_WORLD
     scene = load_scene(args.scene)
+    memory, where = available_memory_on(comm)
+    check_size(scene, memory=memory, index_max=None if args.no_assemble else index_max(), ranks=comm.Get_size(),
+               use="geometry" if args.no_assemble else "lattice", where=where)
     model = LatticeModel(scene)
     out = Path(args.output)
     stem = args.name or Path(args.scene).stem

@@ -2,8 +2,10 @@
 
 Everything after ``--`` goes to the PETSc options database (and wins over code defaults
 and the scene's ``[petsc]`` table).  Errors are printed once, on rank 0 when every rank
-failed alike; a failure on some ranks only ends the whole run with ``MPI_Abort`` after a
-short grace period, so a 2-rank run never hangs.
+failed alike (an internal error's traceback only with ``-v``); a failure on some ranks only
+ends the whole run with ``MPI_Abort`` after a short grace period, so a 2-rank run never
+hangs.  SIGINT and SIGTERM end every rank within seconds, leaving no staging file behind
+(:mod:`meicp.cli.signals`).
 
 Exit codes: :class:`~meicp.cli.exit.Exit`.  ``meicp --help`` lists them and the PETSc option
 prefixes (:data:`meicp.petsc.options.PREFIXES`); at the end of a run every PETSc option no
@@ -25,6 +27,7 @@ from ..petsc.options import PREFIXES, report_unused_options
 from . import eicp, info, lattice, lcp, solve
 from .arguments import verbosity_of
 from .exit import MEANING, Exit
+from .signals import interrupted, interrupts_end_the_run, wait_for_the_end
 
 #: the subcommands, each a module with ``register(subparsers)``, in the order of ``--help``
 SUBCOMMANDS = (solve, info, lcp, eicp, lattice)
@@ -86,6 +89,12 @@ def main(argv: list[str] | None = None) -> int:
     vars(args).pop("verbose_after", None)
     configure_logging(-1 if args.quiet else args.verbose)
     init(petsc_args)
+    with interrupts_end_the_run():
+        return _run(args)
+
+
+def _run(args) -> int:
+    """Run the subcommand; report an error once (see the module docstring)."""
     try:
         code = args.run(args)
         report_unused_options()  # PETSc's own bookkeeping, every prefix (rank 0, via the logger)
@@ -97,8 +106,13 @@ def main(argv: list[str] | None = None) -> int:
     except MeicpError as exc:
         code, text = Exit.FAILED, f"meicp: {exc}"
     except Exception as exc:  # noqa: BLE001 - last resort: report, never hang the other ranks
-        traceback.print_exc()
         code, text = Exit.INTERNAL, f"meicp: internal error: {type(exc).__name__}: {exc}"
+        if getattr(args, "verbose", 0):
+            text = traceback.format_exc() + text
+        else:
+            text += " (run with -v for the traceback)"
+    if interrupted():  # a signal is ending the run: the error is its consequence
+        wait_for_the_end()
     if _all_ranks_failed():
         rank0_print(text, file=sys.stderr)
         return code

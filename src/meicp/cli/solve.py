@@ -37,7 +37,7 @@ from ..contact.result import finite_or_none, seconds
 from ..core.errors import ProblemError
 from ..core.log import configure_logging, rank0_print
 from ..io.results import critical_friction_record, versions, write_results
-from ..io.scene import load_scene
+from ..io.scene import load_scene, read_scene_text
 from ..petsc.stages import stage
 from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
 from .exit import Exit
@@ -190,8 +190,8 @@ def _run(args, comm, t0) -> int:
     log.info(f"loading scene {args.scene}")
     scene = load_scene(args.scene)  # ProblemError (exit 2) on every rank alike, before any work
     try:
-        scene_text = Path(args.scene).read_text(encoding="utf-8")
-    except OSError:
+        scene_text = read_scene_text(args.scene)  # bounded, as load_scene read it
+    except ProblemError:
         scene_text = None
     out = None
     if not args.no_output:

@@ -14,9 +14,11 @@ import scipy.sparse.linalg as spl
 from scipy.optimize import linprog
 
 from ..core.errors import ConvergenceError, ProblemError
+from ..core.machine import available_memory
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..eicp.solve import solve_eicp
 from ..lattice.model import LatticeModel
+from ..lattice.size import check_size
 from ..petsc.assembly import assemble
 from ..petsc.pencil import reduced_pencil
 from ..scene import Scene
@@ -118,6 +120,7 @@ def _friction_states(scene):
     if not isinstance(scene, Scene):
         raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
                            "(meicp.critical_friction also reads a scene file)")
+    check_size(scene, memory=available_memory())  # serial SciPy: this process, no PETSc indices
     model = LatticeModel(scene)
     sets, static = contact_states(scene, model)
     if sets is None:

@@ -6,10 +6,17 @@
 3. For each assignment of the grazing contacts' tangential cases: the pencil
    ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (:mod:`meicp.contact.problem`) and the MEiCP
    ``(σB − A)x = w`` solved for σ ≥ 0: by support enumeration when the reduced problem is
-   small (every divergence mode; an empty list proves stability), else by the SLEPc
-   active-set search (one mode; no mode proves nothing unless the pencil is symmetric and
-   its largest eigenvalue is negative: the Rayleigh-quotient bound, by LDLᵀ inertia).
+   small (every divergence mode; a complete enumeration that finds none, status
+   ``no_solution``, proves stability — ``undecided`` or ``out_of_range`` does not), else by
+   the SLEPc active-set search (one mode; no mode proves nothing unless the pencil is
+   symmetric and A is negative definite with a margin above rounding: the Rayleigh-quotient
+   bound, by LDLᵀ inertia, :func:`meicp.petsc.inertia.pencil_is_negative`).
 4. Modes back in natural numbering: ``u = Q̃ x``.
+
+The verdict is about σ ≥ 0 whatever ``lam_min``: a negative σ is an oscillation, never a
+divergence mode, so ``lam_min`` must be ≥ 0, and a ``lam_min > 0`` only filters the modes
+listed (the search still covers every σ ≥ 0, so a mode with 0 ≤ σ < lam_min still makes the
+scene unstable, and the evidence says how many were left out).
 
 A scene without contact has no frictional instability to decide: it gets a modal analysis
 instead, its lowest vibration modes (:mod:`meicp.contact.modal`).  Each phase runs in its
@@ -28,12 +35,14 @@ import numpy as np
 
 from ..core.errors import ProblemError
 from ..core.progress import Progress
+from ..core.validation import as_real, check_tol
 from ..eicp.problem import lam_floor
-from ..eicp.solve import solve_eicp
+from ..eicp.solve import available_methods, solve_eicp
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
-from ..petsc.comm import mpi_comm
-from ..petsc.inertia import eigenvalues_at_or_above
+from ..lattice.size import check_size
+from ..petsc.comm import available_memory_on, comm_size, index_max, mpi_comm
+from ..petsc.inertia import pencil_is_negative
 from ..petsc.mat import destroying, max_abs_entry
 from ..petsc.stages import stage
 from ..scene import Scene
@@ -49,6 +58,9 @@ log = logging.getLogger("meicp")
 ENUMERATE_FLOPS = 2e9
 ENUMERATE_N = 600
 ENUMERATE_J = 16
+#: keywords ``analyze`` sets itself, or that would turn the verdict into a statement about a
+#: window of σ only (``lam_max``)
+RESERVED_OPTIONS = ("J", "comm", "lam_max", "all_solutions")
 
 
 def enumeration_is_small(r: int, n_j: int) -> bool:
@@ -57,22 +69,30 @@ def enumeration_is_small(r: int, n_j: int) -> bool:
     return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
 
 
-def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=None,
-            **solver_options) -> InstabilityResult:
+def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None, tol=None,
+            scene_path=None, **solver_options) -> InstabilityResult:
     """Divergence modes of a scene's contact equilibrium (see the module docstring).
 
     scene: a :class:`~meicp.scene.Scene` (:func:`meicp.analyze` also reads a scene file).
     comm: an mpi4py communicator (None: serial SciPy/PETSc on one process).  method:
     ``enumerate`` | ``active-set`` | None (the scene's ``[solver] method``, ``auto`` = by
-    size).  scene_path: the file the scene was read from, when the caller read it (the
-    scene's ``source`` says the same; not used here).  Collective on ``comm``.
+    size).  lam_min: list only the modes with σ ≥ lam_min (finite, ≥ 0; default the scene's
+    ``[solver] lam_min``, else 0); the verdict is about every σ ≥ 0 regardless.  tol: the
+    certificate tolerance (default the scene's, else 1e-10).  Other keywords go to the
+    eigen-solver (``target``, ``nev``, ...).  scene_path: the file the scene was read from,
+    when the caller read it (the scene's ``source`` says the same; not used here).
+    Collective on ``comm``.
     """
     t_start = time.perf_counter()
     timings = {}
     if not isinstance(scene, Scene):
         raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
                            "(meicp.analyze also reads a scene file)")
+    lam_min, tol = _check_options(scene, method or scene.solver.method, method is not None, lam_min, tol,
+                                  solver_options)
     comm = mpi_comm(comm)
+    memory, where = available_memory_on(comm)
+    check_size(scene, memory=memory, index_max=index_max(), ranks=comm_size(comm), where=where)
     model = LatticeModel(scene)
     if not has_contact(scene):  # no friction: no instability to decide, its vibration modes instead
         return modal_analysis(scene, model, comm, nev=solver_options.get("nev"),
@@ -122,7 +142,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, solver_options)
+                    modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, lam_min, tol,
+                                                                   solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
             modes += modes_c
             evidences.append(evidence)
@@ -131,7 +152,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     modes.sort(key=lambda m: -m.sigma)
     result.modes = modes
     result.eicp = eicps
-    if modes:
+    if any(s is False for s in stable_flags):  # a mode with σ ≥ 0, listed or not (lam_min)
         result.stable = False
     elif all(s is True for s in stable_flags):
         result.stable = True
@@ -149,13 +170,34 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, scene_path=No
     return result
 
 
-def _solve_meicp(pen: Pencil, scene: Scene, comm, method, options):
-    """The MEiCP of one pencil: its certified modes, the evidence sentence, the verdict
-    (True proved stable, False a mode, None undecided) and the raw EiCP result."""
+def _check_options(scene: Scene, method, from_call: bool, lam_min, tol, options: dict) -> tuple[float, float]:
+    """``(lam_min, tol)`` from the arguments or the scene, checked: ProblemError naming the
+    one that is wrong (also for a keyword ``analyze`` sets itself)."""
+    if method is not None and method not in available_methods():
+        raise ProblemError(f"{'method' if from_call else '[solver] method'} must be one of "
+                           f"{', '.join(available_methods())}, got {method!r}")
+    reserved = sorted(set(options) & set(RESERVED_OPTIONS))
+    if reserved:
+        why = ("the verdict covers every σ ≥ 0; use lam_min to filter the modes listed"
+               if "lam_max" in reserved else "analyze sets it itself")
+        raise ProblemError(f"analyze does not take {reserved[0]!r}: {why}")
+    name = "lam_min" if lam_min is not None else "[solver] lam_min"
+    lam_min = scene.solver.lam_min if lam_min is None else lam_min
+    lam_min = 0.0 if lam_min is None else as_real(lam_min, name)
+    if lam_min < 0:
+        raise ProblemError(f"{name} must be ≥ 0, got {lam_min!r}: a mode with σ < 0 is an oscillation, "
+                           "never a divergence mode")
+    name = "tol" if tol is not None else "[solver] tol"
+    tol = scene.solver.tol if tol is None else tol
+    return lam_min, (1e-10 if tol is None else check_tol(tol, name))
+
+
+def _solve_meicp(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: float, options):
+    """The MEiCP of one pencil: its certified modes with σ ≥ lam_min, the evidence sentence,
+    the verdict on σ ≥ 0 (True proved stable, False a mode, None undecided) and the raw EiCP
+    result."""
     A, B, red = pen.A, pen.B, pen.maps
     solver = scene.solver
-    lam_min = 0.0 if solver.lam_min is None else solver.lam_min
-    tol = solver.tol or 1e-10
     small = enumeration_is_small(red.retained.size, red.J.size)
     chosen = method if method not in (None, "auto") else ("enumerate" if small else "active-set")
     kwargs = dict(options)
@@ -165,25 +207,38 @@ def _solve_meicp(pen: Pencil, scene: Scene, comm, method, options):
         kwargs.setdefault("options", dict(scene.petsc))
         if solver.max_iterations:
             kwargs.setdefault("max_iter", solver.max_iterations)
-    eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=lam_min, tol=tol, comm=comm, **kwargs)
-    # a σ below lam_min (even by 5e-11 just below μ_c) is not a divergence mode, but an exact
-    # σ = lam_min computed a few ulps below it is (eicp.problem.lam_floor)
-    floor = lam_floor(lam_min, (max_abs_entry(A), max_abs_entry(B)))
-    modes = [_mode(sol, red) for sol in eicp.solutions if sol.lam >= floor]
+    # the search covers every σ ≥ 0 (the verdict's threshold); lam_min filters the list only
+    eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=0.0, tol=tol, comm=comm, **kwargs)
+    # a σ below 0 (even by 5e-11 just below μ_c) is not a divergence mode, but an exact σ = 0
+    # (a block free to slide as a whole) computed a few ulps below it is (eicp.problem.lam_floor)
+    scales = (max_abs_entry(A), max_abs_entry(B))
+    found = [_mode(sol, red) for sol in eicp.solutions if sol.lam >= lam_floor(0.0, scales)]
+    modes = [m for m in found if lam_min == 0 or m.sigma >= lam_floor(lam_min, scales)]
+    left_out = (f"; {len(found) - len(modes)} with 0 ≤ σ < lam_min = {lam_min:g} not listed"
+                if len(modes) < len(found) else "")
+    if any(m.sigma < 0 for m in found):
+        left_out += (f"; σ = {min(m.sigma for m in found):.2g} is 0 within rounding "
+                     f"(≥ {lam_floor(0.0, scales):.2g}): an exact σ = 0 mode")
     if chosen == "enumerate":
         cover = eicp.coverage.get("supports", 0)
-        if modes:
-            return modes, f"enumeration of all {cover} supports: {len(modes)} divergence mode(s) with σ ≥ {lam_min}", False, eicp
-        return [], f"enumeration of all {cover} supports: no solution with σ ≥ {lam_min} (a proof)", True, eicp
-    if modes:
-        return modes, f"active-set search: a certified divergence mode after {eicp.coverage.get('eigen_solves')} eigen-solves", False, eicp
+        if found:
+            return modes, (f"enumeration of all {cover} supports: {len(found)} divergence mode(s) with "
+                           f"σ ≥ 0{left_out}"), False, eicp
+        if eicp.status == "no_solution":
+            return [], f"enumeration of all {cover} supports: no solution with σ ≥ 0 (a proof)", True, eicp
+        return [], (f"enumeration of all {cover} supports found no mode, but this is not a proof "
+                    f"({eicp.status}): {eicp.message}"), None, eicp
+    if found:
+        return modes, (f"{chosen} search: a certified divergence mode after "
+                       f"{eicp.coverage.get('eigen_solves')} eigen-solves{left_out}"), False, eicp
     # no mode found: a proof only for a symmetric pencil, through the Rayleigh bound
-    if eigenvalues_at_or_above(A, B, lam_min) == 0:
-        return [], (f"symmetric pencil with no eigenvalue ≥ {lam_min} (inertia of A − {lam_min}·B by an "
-                    f"LDLᵀ factorisation): every MEiCP solution is a Rayleigh quotient of the pencil, so "
-                    f"none has σ ≥ {lam_min} (a proof)"), True, eicp
-    return [], (f"active-set search found no mode with σ ≥ {lam_min} ({eicp.status}); this is not a proof of "
-                "stability"), None, eicp
+    proof = pencil_is_negative(A, B)
+    if proof is not None and proof.proved:
+        return [], (f"symmetric pencil with no eigenvalue σ ≥ 0 (LDLᵀ inertia: {proof.reason}): every "
+                    "MEiCP solution is a Rayleigh quotient of the pencil, so none has σ ≥ 0 (a proof)"), True, eicp
+    why = "the pencil is not symmetric" if proof is None else proof.reason
+    return [], (f"{chosen} search found no mode with σ ≥ 0 ({eicp.status}); this is not a proof of "
+                f"stability: {why}"), None, eicp
 
 
 def _mode(sol, red) -> Mode:

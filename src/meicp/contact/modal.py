@@ -31,7 +31,7 @@ from ..eicp.problem import EiCPProblem, certify_pair
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..petsc.eigen import solve_ghep
-from ..petsc.inertia import eigenvalues_at_or_above
+from ..petsc.inertia import nonnegative_count, pencil_is_negative, rounding_margin
 from ..petsc.mat import destroying, is_petsc_mat, mat_from_scipy, max_abs_entry, vec_to_numpy
 from ..petsc.stages import stage
 from ..scene import Scene
@@ -87,15 +87,18 @@ def modal_analysis(scene: Scene, model: LatticeModel, comm=None, *, nev: int | N
         log.info("modal analysis: no contact; the %d lowest vibration modes of %d free DOFs (SLEPc)", want, r)
         t0 = time.perf_counter()
         with stage("eigen"):
-            held_back = eigenvalues_at_or_above(pen.A, pen.B, 0.0)  # σ ≥ 0: zero stiffness
+            proof = pencil_is_negative(pen.A, pen.B)   # A = −K_FF, B = M_FF: symmetric
+            # σ ≥ 0 within rounding: motions of zero stiffness (rigid-body motions)
+            proved = proof is not None and proof.proved is True
+            held_back = 0 if proved else nonnegative_count(pen.A, rounding_margin(r))
             modes, dropped = _modes(pen, want, tol, dict(scene.petsc) if options is None else options,
                                     singular=held_back > 0)
         timings["eigen"] = time.perf_counter() - t0
     result.modes = modes
-    result.stable = True if held_back == 0 else None
+    result.stable = True if proved else None
     computed = (f"the {len(modes)} lowest vibration modes by SLEPc (σ = −ω², certified)"
                 + (f"; {dropped} eigenpair(s) failed the certificate and are left out" if dropped else ""))
-    if held_back == 0:
+    if proved:
         result.evidence = (f"no friction, hence no frictional instability; K is positive definite on the {r} free "
                            f"DOFs (LDLᵀ inertia of −K: no σ ≥ 0), so every motion oscillates; {computed}")
     else:

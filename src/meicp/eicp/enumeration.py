@@ -147,6 +147,7 @@ class _Enumerator:
         self.unverified = 0
         self.worst_unverified = 0.0
         self.out_of_range = 0
+        self.unsolved = 0  # supports whose QZ did not converge (extreme scaling)
         self.infinite = 0
         self.refined = 0
 
@@ -246,7 +247,11 @@ class _Enumerator:
         self.slow_path += first
         self.second_pass += not first
         AR, BR = view.A[np.ix_(R, R)], view.B[np.ix_(R, R)]
-        (alpha, beta), V = scipy.linalg.eig(AR, BR, homogeneous_eigvals=True)
+        try:
+            (alpha, beta), V = scipy.linalg.eig(AR, BR, homogeneous_eigvals=True)
+        except (np.linalg.LinAlgError, ValueError):  # LAPACK's QZ did not converge: this
+            self.unsolved += 1                       # support may hide a solution
+            return
         eps = np.finfo(float).eps
         # B_RR numerically singular: QZ returns its infinite eigenvalues with β at rounding
         infinite = np.abs(beta) <= INFINITE_FACTOR * R.size * eps * max(np.abs(BR).max(), 1e-300)
@@ -400,20 +405,20 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
             progress.update(done, work, f"support size {k} of {J.size}, {len(e.rows)} solution(s) so far")
     lams, X, W, masks, res = e.arrays()
     counts = np.array([e.eigen_solves, e.slow_path, e.unverified, e.out_of_range, e.infinite, e.refined,
-                       e.second_pass])
+                       e.second_pass, e.unsolved])
     worst = e.worst_unverified
     if size > 1:
         parts = comm.allgather((lams, X, W, masks, res))
         lams, X, W, masks, res = (np.concatenate([p[k] for p in parts]) for k in range(5))
         counts = comm.allreduce(counts)
         worst = comm.allreduce(worst, op=_max_op())
-    solves, slow, unverified, out_of_range, infinite, refined, second = (int(c) for c in counts)
+    solves, slow, unverified, out_of_range, infinite, refined, second, unsolved = (int(c) for c in counts)
     order = np.lexsort((np.arange(lams.size), -lams))
     found = [EiCPSolution(float(lams[r]), X[r], W[r], J[masks[r]], float(res[r])) for r in order]
     result = EiCPResult(method="enumerate", solutions=found, iterations=solves)
     result.coverage = {"supports": 2 ** J.size, "eigen_solves": solves, "one_by_one": slow, "ranks": size,
                        "window": (lam_min, lam_max), "unverified": unverified, "out_of_range": out_of_range,
-                       "infinite": infinite, "refined": refined, "second_pass": second,
+                       "infinite": infinite, "refined": refined, "second_pass": second, "unsolved": unsolved,
                        "lam_exponent": e.view.scaling.lam_exponent}
     result.timings["solve"] = time.perf_counter() - t0
     window = "" if lam_min is None and lam_max is None else f" in [{lam_min}, {lam_max}]"
@@ -422,6 +427,8 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
         doubts.append(f"{unverified} sign-feasible candidate(s) whose eigenpair could not be resolved "
                       f"(row-wise residual up to {worst:.1e} after Newton polishing: the pencil is too badly "
                       f"conditioned on their supports) may hide solutions")
+    if unsolved:
+        doubts.append(f"the QZ eigen-solve (LAPACK) did not converge on {unsolved} support(s)")
     if out_of_range:
         doubts.append(f"{out_of_range} candidate(s) have λ beyond double precision (λ = 2^{e.view.scaling.lam_exponent}"
                       f"·λ̃ of the scaled pencil overflows or underflows)")

@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from ..core.cleanup import on_interrupt
 from ..core.errors import ProblemError
 from ..lattice.assembly import as_model
 from ..lattice.model import BOND_KINDS, LatticeModel
@@ -278,32 +279,38 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
     if parallel_io == "collective" and mcomm is not None and not has_mpi:
         raise ProblemError("parallel_io='collective' needs an MPI-enabled h5py (run under mpirun)")
     collective = mcomm is not None and has_mpi and parallel_io != "gather"
-    try:
-        if mcomm is None:
-            n_bonds = data["bonds/connectivity"].shape[0]
-            _write_serial(h5py, tmp, data, _materials(model), _attrs(model, n_bonds), text, attrs)
-        elif collective:
-            n_bonds = _write_collective(h5py, mcomm, tmp, data, model, text, attrs)
-        else:
-            n_bonds = _write_gathered(h5py, mcomm, tmp, data, model, text, attrs)
-    except BaseException:
-        if rank == 0 and tmp.exists():
-            tmp.unlink()
-        raise
-    if mcomm is not None:
-        mcomm.Barrier()
     xdmf = path.with_suffix(".xdmf")
-    if rank == 0:
-        os.replace(tmp, path)
-        shapes = {name: arr.shape[1:] for name, arr in data.items()}
-        xtmp = xdmf.with_name(f".{xdmf.name}.{os.getpid()}.tmp")
-        legends = {_xdmf_name(name): a["legend"] for name, a in attrs.items() if "legend" in a and name in data}
-        xtmp.write_text(xdmf_text(path.name, model.n_nodes, n_bonds, shapes,
-                                  {name: arr.dtype for name, arr in data.items()}, legends), encoding="utf-8")
-        os.replace(xtmp, xdmf)
-    if mcomm is not None:
-        mcomm.Barrier()
+    xtmp = xdmf.with_name(f".{xdmf.name}.{os.getpid()}.tmp")
+    with on_interrupt(lambda: _discard(tmp, xtmp) if rank == 0 else None):  # meicp.core.cleanup
+        try:
+            if mcomm is None:
+                n_bonds = data["bonds/connectivity"].shape[0]
+                _write_serial(h5py, tmp, data, _materials(model), _attrs(model, n_bonds), text, attrs)
+            elif collective:
+                n_bonds = _write_collective(h5py, mcomm, tmp, data, model, text, attrs)
+            else:
+                n_bonds = _write_gathered(h5py, mcomm, tmp, data, model, text, attrs)
+        except BaseException:
+            if rank == 0 and tmp.exists():
+                tmp.unlink()
+            raise
+        if mcomm is not None:
+            mcomm.Barrier()
+        if rank == 0:
+            os.replace(tmp, path)
+            shapes = {name: arr.shape[1:] for name, arr in data.items()}
+            legends = {_xdmf_name(name): a["legend"] for name, a in attrs.items() if "legend" in a and name in data}
+            xtmp.write_text(xdmf_text(path.name, model.n_nodes, n_bonds, shapes,
+                                      {name: arr.dtype for name, arr in data.items()}, legends), encoding="utf-8")
+            os.replace(xtmp, xdmf)
+        if mcomm is not None:
+            mcomm.Barrier()
     return LatticeFiles(path, xdmf)
+
+
+def _discard(*paths: Path) -> None:
+    for p in paths:
+        p.unlink(missing_ok=True)
 
 
 def _write_serial(h5py, path, data, materials, attrs, text, described):

@@ -40,11 +40,11 @@ MAX_ENTRIES = 2 ** 28
 _TOKEN = re.compile(rb"\S+")
 
 
-def _regular_file(path: Path) -> None:
+def _regular_file(path: Path, what: str = "problem") -> None:
     if not path.exists():
         raise ProblemError(f"{path}: no such file")
     if not path.is_file():
-        raise ProblemError(f"{path}: not a regular file (a device, FIFO or directory cannot be read as a problem)")
+        raise ProblemError(f"{path}: not a regular file (a device, FIFO or directory cannot be read as a {what})")
 
 
 def _entries_limit(path, what: str, count: int) -> None:
@@ -53,19 +53,25 @@ def _entries_limit(path, what: str, count: int) -> None:
                            f"(meicp.io.problem_files.MAX_ENTRIES)")
 
 
-def read_text(path: Path, limit: int | None = None) -> bytes:
+def read_text(path: Path, limit: int | None = None, *, what: str = "problem",
+              limit_name: str = "meicp.io.problem_files.MAX_TEXT_BYTES") -> bytes:
     """The bytes of a text file, at most ``limit`` (default ``MAX_TEXT_BYTES``); refuses
-    larger files and files with NUL bytes (binary data)."""
+    anything but a regular file, larger files and files with NUL bytes (binary data), and
+    drops a UTF-8 byte-order mark.  ``what`` names the kind of file in the messages (also
+    used for scene files), ``limit_name`` the constant that sets the limit."""
     limit = MAX_TEXT_BYTES if limit is None else limit
-    _regular_file(path)
-    with open(path, "rb") as f:
-        data = f.read(limit + 1)
+    path = Path(path)
+    _regular_file(path, what)
+    try:
+        with open(path, "rb") as f:
+            data = f.read(limit + 1)
+    except OSError as exc:
+        raise ProblemError(f"{path}: cannot be read: {exc.strerror or exc}") from None
     if len(data) > limit:
-        raise ProblemError(f"{path}: larger than {limit} bytes, the limit for a text problem file "
-                           f"(meicp.io.problem_files.MAX_TEXT_BYTES)")
+        raise ProblemError(f"{path}: larger than {limit} bytes, the limit for a text {what} file ({limit_name})")
     nul = data.find(b"\0")
     if nul >= 0:
-        raise ProblemError(f"{path}: binary data (a NUL byte at offset {nul}), not a text problem file")
+        raise ProblemError(f"{path}: binary data (a NUL byte at offset {nul}), not a text {what} file")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte-order mark is not an error
         data = data[3:]
     return data

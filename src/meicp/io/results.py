@@ -88,6 +88,7 @@ import numpy as np
 import scipy
 
 from .. import __version__
+from ..core.cleanup import on_interrupt, uninterrupted
 from ..core.errors import MeicpError, ProblemError
 from ..info import collect
 from ..lattice.assembly import as_model
@@ -678,22 +679,32 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
     if not os.access(directory, os.W_OK):
         raise ProblemError(f"output directory {str(directory)!r} is not writable")
     stage = directory / f".meicp-results.{os.getpid()}.tmp"
+    moved = False
+
+    def discard():  # on an error, or from the signal watchdog (meicp.core.cleanup)
+        shutil.rmtree(stage, ignore_errors=True)
+        if created is not None and not moved:
+            shutil.rmtree(created, ignore_errors=True)
+
     try:
-        stage.mkdir()
-        written = _write_all(stage, scene, result, prep, text, vers, ranks, max_xdmf_modes, plots, mu_c,
-                             overrides)
-        # data first, the XDMF (which points at lattice.h5) after it, results.h5 last
-        order = [k for k in ("lattice", "xdmf", "mode_png", "contacts_png", "results") if k in written]
-        for key in order:
-            os.replace(stage / written[key], directory / written[key])
+        with on_interrupt(discard):
+            stage.mkdir()
+            written = _write_all(stage, scene, result, prep, text, vers, ranks, max_xdmf_modes, plots, mu_c,
+                                 overrides)
+            # data first, the XDMF (which points at lattice.h5) after it, results.h5 last; a
+            # signal waits for these renames, so the outputs are never half old, half new
+            order = [k for k in ("lattice", "xdmf", "mode_png", "contacts_png", "results") if k in written]
+            with uninterrupted():
+                for key in order:
+                    os.replace(stage / written[key], directory / written[key])
+                moved = True
         if plots:  # a stale PNG from an earlier run of another scene would mislead
             for key in ("contacts_png",):
                 if key not in written and (directory / FILES[key]).exists():
                     (directory / FILES[key]).unlink()
         return written
     except BaseException:
-        if created is not None:
-            shutil.rmtree(created, ignore_errors=True)
+        discard()
         raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)

@@ -69,13 +69,21 @@ The whole schema, with defaults (``required`` = no default)::
     [solver]
     method = "auto"               # a method name, checked by the solver that uses it
     all_solutions = false         # enumerate every complementarity solution
-    lam_min = <none>              # lower bound on the eigenvalue (σ), optional
+    lam_min = <none>              # list only the modes with σ >= lam_min (>= 0), optional;
+                                  # the verdict is about every σ >= 0 whatever it is
     nev = <none>                  # eigenpairs per eigen-solve (integer >= 1), optional
-    tol = <none>                  # tolerance (> 0), optional
+    tol = <none>                  # certificate tolerance in (0, 0.01], optional
     max_iterations = <none>       # integer >= 1, optional
 
     [petsc]                       # free-form: PETSc options (without the leading dash and
     eps_tol = 1e-10               # without the solver's prefix); scalar values only
+
+Values that are each in range but not together are refused too: node coordinates and
+masses ρ·a³ must be finite normal doubles, and the bond stiffnesses of a scene may differ by
+at most ``MAX_STIFFNESS_CONTRAST``.  Files are read within bounds (:func:`read_scene_text`:
+a regular file, at most ``MAX_SCENE_BYTES``, UTF-8, nesting at most ``MAX_NESTING`` deep);
+whether the scene fits the machine is checked where it is used
+(:func:`meicp.lattice.size.check_size`).
 
 What is resolved at load time (the interfaces not declared, default stiffnesses, the width
 of an embedded band) is described in :mod:`meicp.scene`.
@@ -87,14 +95,18 @@ import dataclasses
 import difflib
 import math
 import os
+import re
+import reprlib
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from ..core.errors import ProblemError
+from ..core.validation import MAX_TOL
 from ..scene import (BOUNDARY_KINDS, CONTACT, INTERFACE_KINDS, SIDES, SOLVE, STATES, Boundary, Contact,
                      Embedded, FrozenOptions, Interface, Lattice, Layer, Load, Scene, Solver)
+from .problem_files import read_text
 
 
 # --------------------------------------------------------------------------- loading
@@ -105,23 +117,73 @@ def as_scene(scene) -> Scene:
     return load_scene(scene) if isinstance(scene, (str, os.PathLike)) else scene
 
 
+#: the largest scene file read (a per-node state list of 10⁵ columns is about 1 MB)
+MAX_SCENE_BYTES = 4 * 2 ** 20
+#: the deepest nesting of arrays / inline tables, and the longest dotted key, accepted: a
+#: scene needs 3; tomllib recurses on the first and is quadratic in the second (a 60 kB
+#: key ``a.a.a...`` takes gigabytes)
+MAX_NESTING = 32
+
+
+def read_scene_text(path) -> str:
+    """The text of a scene file, read within bounds: a regular file (not ``/dev/zero`` or
+    a FIFO), at most ``MAX_SCENE_BYTES``, UTF-8 (a byte-order mark is dropped).  Raises
+    :class:`ProblemError` naming the file and the problem."""
+    path = Path(path)
+    if not path.exists():
+        raise ProblemError(f"cannot read scene file {str(path)!r}: no such file")
+    data = read_text(path, MAX_SCENE_BYTES, what="scene", limit_name="meicp.io.scene.MAX_SCENE_BYTES")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ProblemError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start} "
+                           "is invalid): a scene file is TOML, which is UTF-8") from None
+
+
 def load_scene(path) -> Scene:
     """Read and validate a TOML scene file.  Raises :class:`ProblemError` naming the key."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProblemError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from None
-    return loads_scene(text, source=str(path))
+    return loads_scene(read_scene_text(path), source=str(path))
 
 
 def loads_scene(text: str, source: str = "<string>") -> Scene:
     """Parse and validate scene TOML given as a string."""
+    if not isinstance(text, str):
+        raise ProblemError(f"{source}: scene text must be a string, got {type(text).__name__}")
+    text = text.removeprefix("\ufeff")  # a byte-order mark is not TOML, but harmless
+    _check_nesting(text, source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ProblemError(f"{source}: not a scene: arrays or tables nested too deeply") from None
     return scene_from_dict(data, source=source)
+
+
+#: what matters to nesting in TOML text: strings and comments (skipped whole), brackets,
+#: braces, dots and the characters that end a key
+_LEXEMES = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*|[][{}.=,\n]',
+                      re.S)
+
+
+def _check_nesting(text: str, source: str) -> None:
+    """Refuse nesting deeper than MAX_NESTING before tomllib sees it: brackets and braces
+    outside strings and comments, and dots in one key outside strings."""
+    depth = dots = 0
+    for m in _LEXEMES.finditer(text):
+        c = m.group()
+        if c in "[{":
+            depth += 1
+        elif c in "]}":
+            depth -= 1
+        elif c == ".":
+            dots += 1
+        if c in "=,[]{}\n":
+            dots = 0
+        if depth > MAX_NESTING or dots > MAX_NESTING:
+            what = "arrays or inline tables nested" if depth > MAX_NESTING else "a dotted key"
+            line = text.count("\n", 0, m.start()) + 1
+            raise ProblemError(f"{source}: line {line}: {what} deeper than {MAX_NESTING} levels: not a scene")
 
 
 def scene_from_dict(data: Mapping, source: str = "<dict>") -> Scene:
@@ -132,10 +194,22 @@ def scene_from_dict(data: Mapping, source: str = "<dict>") -> Scene:
 # --------------------------------------------------------------------------- validation
 
 _REQUIRED = object()
+#: the smallest normal double: a node mass below it loses precision, 0 makes B singular
+_TINY = 2.2250738585072014e-308
+#: the largest ratio of two bond stiffnesses in one scene: where a bond of stiffness k meets
+#: one of k·C, the first keeps about 16 − log10(C) digits in K (double precision); with the
+#: stiff layer floating on the base, two_layers.toml gives the same verdict up to C = 1e12
+#: and σ < 0 "modes" from 1e14 on
+MAX_STIFFNESS_CONTRAST = 1e12
+
+
+_REPR = reprlib.Repr()
+_REPR.maxstring = _REPR.maxother = 80
 
 
 def _fmt(value) -> str:
-    return repr(value)
+    """A value for a message: its repr, shortened (a scene may hold a million-entry list)."""
+    return _REPR.repr(value)
 
 
 def _keys(cls, *skip: str) -> tuple[str, ...]:
@@ -304,6 +378,7 @@ class _SceneParser:
         ny = sum(layer.rows for layer in layers)
         if ny * lattice.nx * 2 >= 2**62:
             self.fail("layers", f"declare {ny} rows x {lattice.nx} columns: too many DOFs")
+        self.magnitudes(lattice, ny, layers, embedded, interfaces, contact, load)
         return Scene(lattice=lattice, layers=tuple(layers), boundary=boundary,
                      interfaces=tuple(interfaces), embedded=tuple(embedded), contact=contact,
                      load=load, solver=solver, petsc=petsc, title=title, source=self.source)
@@ -475,12 +550,60 @@ class _SceneParser:
             self.fail("solver.method", "must not be empty")
         s = Solver(method=method,
                    all_solutions=t.boolean("all_solutions", False),
-                   lam_min=t.number("lam_min", None),
+                   lam_min=t.number("lam_min", None, nonnegative=True),
                    nev=t.integer("nev", None, minimum=1),
                    tol=t.number("tol", None, positive=True),
                    max_iterations=t.integer("max_iterations", None, minimum=1))
         t.done()
+        if s.tol is not None and s.tol > MAX_TOL:
+            self.fail("solver.tol", f"must be <= {MAX_TOL:g} (a relative certificate tolerance; a looser "
+                                    f"one certifies nothing), got {s.tol:g}")
         return s
+
+    def magnitudes(self, lattice, ny: int, layers, embedded, interfaces, contact, load) -> None:
+        """Values each in range alone but not together: coordinates and node masses must be
+        finite normal floats, and the bond stiffnesses (and a friction coefficient, which
+        multiplies them in a slipping node's row) within MAX_STIFFNESS_CONTRAST of each
+        other."""
+        a = lattice.spacing
+        extent = max(lattice.nx - 1 + abs(lattice.shear) * (ny - 1), ny - 1, 1)
+        if not math.isfinite(a * extent) or not math.isfinite(a * math.hypot(1.0, lattice.shear)):
+            self.fail("lattice.spacing", f"= {a:g} with nx = {lattice.nx}, {ny} rows and shear = "
+                                         f"{lattice.shear:g} puts nodes beyond double precision")
+        cube = a * a * a  # the mass per unit density; a ** 3 would raise OverflowError
+        if not (math.isfinite(cube) and cube >= _TINY):
+            self.fail("lattice.spacing", f"= {a:g}: the node mass per unit density a³ = {cube:g} is beyond "
+                                         "double precision (a must lie in about [3e-103, 5e102])")
+        masses = [(f"layers[{k}].density", m.density) for k, m in enumerate(layers)]
+        masses += [(f"embedded[{k}].density", e.density) for k, e in enumerate(embedded)]
+        for key, rho in masses:
+            mass = rho * cube
+            if not (math.isfinite(mass) and mass >= _TINY):
+                self.fail(key, f"= {rho:g} with lattice.spacing = {a:g} gives a node mass ρ·a³ = {mass:g}, "
+                               "beyond double precision (it must lie in [2.2e-308, 1.8e308])")
+            if load is not None and not math.isfinite(load.gravity * mass):
+                self.fail("load.gravity", f"= {load.gravity:g} times the node mass of {key} overflows")
+        stiff = [(f"layers[{k}].stiffness", m.stiffness) for k, m in enumerate(layers)]
+        stiff += [(f"embedded[{k}].stiffness", e.stiffness) for k, e in enumerate(embedded)]
+        stiff += [(f"embedded[{k}].interface_stiffness", e.interface_stiffness) for k, e in enumerate(embedded)]
+        stiff += [(f"interfaces.stiffness (below = {i.below!r})", i.stiffness) for i in interfaces
+                  if i.bonded and i.declared]
+        if not isinstance(lattice.interface_stiffness, str):
+            stiff.append(("lattice.interface_stiffness", lattice.interface_stiffness))
+        (k_lo, lo), (k_hi, hi) = min(stiff, key=lambda t: t[1]), max(stiff, key=lambda t: t[1])
+        if hi > MAX_STIFFNESS_CONTRAST * lo:
+            self.fail(k_lo, f"= {lo:g} and {k_hi} = {hi:g} differ by {hi / lo:.1e}, more than "
+                            f"{MAX_STIFFNESS_CONTRAST:.0e}: the softer bonds are lost in the rounding of "
+                            "the stiffer ones where they meet (measured: wrong modes from 1e14 on); model a "
+                            "rigid part with fixed boundary conditions instead")
+        frictions = [("contact.friction", contact.friction)] if contact is not None else []
+        frictions += [(f"interfaces.friction (below = {i.below!r})", i.friction) for i in interfaces
+                      if not i.bonded]
+        for key, mu in frictions:
+            if mu > MAX_STIFFNESS_CONTRAST:
+                self.fail(key, f"= {mu:g} is above {MAX_STIFFNESS_CONTRAST:.0e}: a slipping node's row sums "
+                               "μ times the normal stiffness and the tangential one, which would be lost in "
+                               "rounding (measured: spurious modes at μ = 1e300)")
 
     def petsc(self, data) -> Mapping[str, Any]:
         if not isinstance(data, Mapping):

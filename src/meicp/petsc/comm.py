@@ -9,6 +9,9 @@ ranks, else ``None`` (serial: nothing to distribute, gather or broadcast).
 
 from __future__ import annotations
 
+import numpy as np
+
+from ..core.machine import available_memory
 from . import import_petsc
 
 
@@ -33,3 +36,23 @@ def to_petsc_comm(comm):
     PETSc = import_petsc()
     mcomm = mpi_comm(comm)
     return PETSc.COMM_SELF if mcomm is None else PETSc.Comm(mcomm)
+
+
+def available_memory_on(comm) -> tuple[int | None, str]:
+    """``(bytes, where)``: the memory the ranks of ``comm`` can allocate together, the
+    available memory of each host counted once (None when a host does not say), and a
+    phrase naming the hosts for messages.  Collective."""
+    mcomm = mpi_comm(comm)
+    if mcomm is None:
+        return available_memory(), "this machine"
+    from mpi4py import MPI
+
+    hosts = dict(mcomm.allgather((MPI.Get_processor_name(), available_memory())))
+    if any(v is None for v in hosts.values()):
+        return None, f"{len(hosts)} host(s)"
+    return sum(hosts.values()), "this machine" if len(hosts) == 1 else f"the {len(hosts)} hosts together"
+
+
+def index_max() -> int:
+    """The largest index of this PETSc build (2³¹ − 1 with Debian's 32-bit ``PetscInt``)."""
+    return int(np.iinfo(import_petsc().IntType).max)
