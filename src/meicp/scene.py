@@ -179,6 +179,7 @@ class Solver:
     nev: int | None = None
     tol: float | None = None
     max_iterations: int | None = None
+    flutter: bool = True
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,7 @@ from ..petsc.inertia import pencil_is_negative
 from ..petsc.mat import destroying, max_abs_entry
 from ..petsc.stages import stage
 from ..scene import Scene
+from .flutter import analyze_flutter, not_analysed
 from .maps import grazing_cases
 from .modal import has_contact, modal_analysis
 from .problem import Pencil, contact_states, pencil_of
@@ -70,7 +71,7 @@ def enumeration_is_small(r: int, n_j: int) -> bool:
 
 
 def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None, tol=None,
-            scene_path=None, **solver_options) -> InstabilityResult:
+            scene_path=None, flutter: bool | None = None, **solver_options) -> InstabilityResult:
     """Divergence modes of a scene's contact equilibrium (see the module docstring).
 
     scene: a :class:`~meicp.scene.Scene` (:func:`meicp.analyze` also reads a scene file).
@@ -81,7 +82,9 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     certificate tolerance (default the scene's, else 1e-10).  Other keywords go to the
     eigen-solver (``target``, ``nev``, ...).  scene_path: the file the scene was read from,
     when the caller read it (the scene's ``source`` says the same; not used here).
-    Collective on ``comm``.
+    flutter: also decide flutter of steady sliding (:mod:`meicp.contact.flutter`; default the
+    scene's ``[solver] flutter``, true); False leaves ``result.flutter`` None, so ``stable``
+    cannot be True.  Collective on ``comm``.
     """
     t_start = time.perf_counter()
     timings = {}
@@ -90,6 +93,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                            "(meicp.analyze also reads a scene file)")
     lam_min, tol = _check_options(scene, method or scene.solver.method, method is not None, lam_min, tol,
                                   solver_options)
+    flutter = _check_flutter(scene, flutter)
     comm = mpi_comm(comm)
     memory, where = available_memory_on(comm)
     check_size(scene, memory=memory, index_max=index_max(), ranks=comm_size(comm), where=where)
@@ -119,7 +123,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
     # -- one MEiCP per grazing case -------------------------------------------------------
     method = method or scene.solver.method
-    modes, evidences, stable_flags, eicps = [], [], [], []
+    modes, evidences, stable_flags, eicps, sliding = [], [], [], [], None
     n_grazing = sum(s == "grazing" for cs in sets for s in cs.states)
     progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
     with destroying(K, M):
@@ -145,10 +149,17 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                     modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, lam_min, tol,
                                                                    solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
+                if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
+                    with stage("flutter"):
+                        sliding = analyze_flutter(K, M, model, sets, scene, comm, pencil=pen, static=static,
+                                                  options=dict(scene.petsc))
             modes += modes_c
             evidences.append(evidence)
             stable_flags.append(stable)
             eicps.append(eicp)
+        if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
+            with stage("flutter"):
+                sliding = analyze_flutter(K, M, model, sets, scene, comm, static=static, options=dict(scene.petsc))
     modes.sort(key=lambda m: -m.sigma)
     result.modes = modes
     result.eicp = eicps
@@ -165,6 +176,11 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
         result.message = failed[0].message
     else:
         result.status = "solved"
+    result.divergence = None if result.stable is None else not result.stable
+    sliding = sliding or not_analysed("flutter = false")
+    result.flutter, result.flutter_modes, result.flutter_evidence = sliding.flutter, sliding.modes, sliding.evidence
+    result.compose_verdict()
+    timings["flutter"] = sliding.seconds
     timings["total"] = time.perf_counter() - t_start
     result.timings = timings
     return result
@@ -190,6 +206,14 @@ def _check_options(scene: Scene, method, from_call: bool, lam_min, tol, options:
     name = "tol" if tol is not None else "[solver] tol"
     tol = scene.solver.tol if tol is None else tol
     return lam_min, (1e-10 if tol is None else check_tol(tol, name))
+
+
+def _check_flutter(scene: Scene, flutter) -> bool:
+    if flutter is None:
+        return scene.solver.flutter
+    if not isinstance(flutter, (bool, np.bool_)):
+        raise ProblemError(f"flutter must be True or False, got {flutter!r}")
+    return bool(flutter)
 
 
 def _solve_meicp(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: float, options):

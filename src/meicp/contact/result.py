@@ -1,5 +1,6 @@
-"""What :func:`meicp.analyze` returns (docs/design.md §10.2): divergence modes, stability verdict and
-its evidence, contact states, timings; and the summary table ``meicp solve`` prints."""
+"""What :func:`meicp.analyze` returns (docs/design.md §10.2): divergence modes and verdict, flutter
+modes and verdict (docs/flutter.md), each with its evidence, contact states, timings; and the
+summary table ``meicp solve`` prints."""
 
 from __future__ import annotations
 
@@ -60,6 +61,63 @@ class Mode:
 
 
 @dataclass
+class FlutterMode:
+    """One flutter mode of steady sliding (docs/flutter.md): a non-real eigenvalue σ of the
+    sliding pencil, reported once per conjugate pair (Im σ > 0).  λ = √σ (principal branch):
+    the motion grows as exp(growth_rate·t) and oscillates at the angular ``frequency``.
+
+    x: the complex mode shape in natural DOF numbering (length 2·nx·ny, ‖x‖₂ = 1, largest
+    entry real positive; fixed and sticking DOFs 0).  residual: backward error
+    ‖Ax − σBx‖ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖) on the retained DOFs (a mode above
+    :data:`meicp.contact.flutter.RESIDUAL_TOL` is never reported).  support: the base's
+    sliding contact nodes of the pencil (columns, left to right); interface_support the same
+    per frictional interface.  radius: how far rounding may move σ (dense path: the
+    first-order bound n·u·(‖A‖ + |σ|‖B‖)·κ; large-scale path: the margin used instead of
+    the unknown κ); |Im σ| exceeds it, so σ is not real.  branch: the grazing branch
+    (``separated`` / ``sliding ...``; empty without grazing contacts).  found_by: the method.
+    """
+
+    sigma: complex
+    x: np.ndarray
+    residual: float
+    support: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    interface_support: dict = field(default_factory=dict)
+    radius: float = float("nan")
+    branch: str = ""
+    found_by: str = ""
+
+    @property
+    def growth_rate(self) -> float:
+        return growth_frequency(self.sigma)[0]
+
+    @property
+    def frequency(self) -> float:
+        return growth_frequency(self.sigma)[1]
+
+    def to_dict(self) -> dict:
+        """Everything but the shape ``x``, as JSON-ready values."""
+        return {"sigma_real": finite_or_none(self.sigma.real), "sigma_imag": finite_or_none(self.sigma.imag),
+                "growth_rate": finite_or_none(self.growth_rate), "frequency": finite_or_none(self.frequency),
+                "residual": finite_or_none(self.residual), "radius": finite_or_none(self.radius),
+                "support": [int(i) for i in np.ravel(self.support)],
+                "interface_support": {str(k): [int(i) for i in np.ravel(v)]
+                                      for k, v in self.interface_support.items()},
+                "branch": self.branch, "found_by": self.found_by}
+
+
+def growth_frequency(sigma) -> tuple[float, float]:
+    """(Re λ, |Im λ|) of λ = √σ without cancellation: for Re σ < 0 the growth rate is
+    |Im σ| / (2|Im λ|) (``sqrt((|σ| + Re σ)/2)`` loses every digit when |Im σ| ≪ |Re σ|)."""
+    s = complex(sigma)
+    r = abs(s)
+    if s.real >= 0:
+        g = float(np.sqrt(0.5 * (r + s.real)))
+        return g, (abs(s.imag) / (2 * g) if g > 0 else 0.0)
+    f = float(np.sqrt(0.5 * (r - s.real)))
+    return abs(s.imag) / (2 * f), f
+
+
+@dataclass
 class InstabilityResult(Result):
     """Result of :func:`meicp.analyze`.
 
@@ -67,9 +125,17 @@ class InstabilityResult(Result):
         ``"modal"`` (no contact: the lowest vibration modes, :mod:`meicp.contact.modal`).
     modes: certified divergence modes, fastest (largest σ) first; in a modal analysis the
         vibration modes (σ = −ω² ≤ 0), lowest frequency first.
-    stable: True when no σ ≥ 0 solution exists and that is proved (``evidence`` says how);
-        False when a certified mode exists; None when the search was inconclusive.
-    evidence: one sentence on what was searched and what it proves.
+    divergence: False when no σ ≥ 0 solution exists and that is proved (``evidence`` says
+        how); True when a certified divergence mode exists; None when the search was
+        inconclusive.
+    flutter: True when a certified flutter mode of steady sliding exists, False when its
+        absence is proved (dense QZ of the whole spectrum, or symmetry), None when undecided
+        or not analysed (``flutter_evidence`` says which).
+    stable: True only when divergence and flutter are both False; False when either is
+        True; else None.  In a modal analysis: the modal verdict.
+    evidence: one sentence on what the divergence search covered and what it proves.
+    flutter_modes: certified :class:`FlutterMode` s, fastest (largest growth rate) first.
+    flutter_evidence: what the flutter analysis searched and what it proves.
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
@@ -83,6 +149,10 @@ class InstabilityResult(Result):
     modes: list = field(default_factory=list)
     stable: bool | None = None
     evidence: str = ""
+    divergence: bool | None = None
+    flutter: bool | None = None
+    flutter_modes: list = field(default_factory=list)
+    flutter_evidence: str = ""
     states: list = field(default_factory=list)
     interface_states: dict = field(default_factory=dict)
     static: object = None
@@ -92,6 +162,19 @@ class InstabilityResult(Result):
     @property
     def modal(self) -> bool:
         return self.analysis == "modal"
+
+    def compose_verdict(self) -> None:
+        """``stable`` from ``divergence`` and ``flutter``: True only when both are excluded."""
+        parts = (self.divergence, self.flutter)
+        self.stable = False if True in parts else (True if all(p is False for p in parts) else None)
+
+    @property
+    def divergence_verdict(self) -> str:
+        return {True: "DIVERGENCE", False: "NO DIVERGENCE"}.get(self.divergence, "DIVERGENCE UNDECIDED")
+
+    @property
+    def flutter_verdict(self) -> str:
+        return {True: "FLUTTER", False: "NO FLUTTER"}.get(self.flutter, "FLUTTER UNDECIDED")
 
     @property
     def verdict(self) -> str:
@@ -103,15 +186,19 @@ class InstabilityResult(Result):
 
     def to_dict(self) -> dict:
         """The result as JSON-ready values, keyed like its attributes (``meicp solve --json``):
-        analysis, verdict, stable, status, success, message, evidence, modes (each
-        :meth:`Mode.to_dict`, no shapes), states, interface_states, sizes, timings, and the
+        analysis, verdict, stable, divergence, flutter, status, success, message, evidence,
+        flutter_evidence, modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
+        :meth:`FlutterMode.to_dict`), states, interface_states, sizes, timings, and the
         static equilibrium's status when states were solved for."""
         static = self.static
         return {
             "analysis": self.analysis, "verdict": self.verdict, "stable": self.stable,
+            "divergence": self.divergence, "flutter": self.flutter,
             "status": self.status, "success": self.success, "message": self.message,
             "evidence": self.evidence, "iterations": int(self.iterations),
             "modes": [m.to_dict() for m in self.modes],
+            "flutter_evidence": self.flutter_evidence,
+            "flutter_modes": [m.to_dict() for m in self.flutter_modes],
             "states": list(self.states),
             "interface_states": {str(k): list(v) for k, v in self.interface_states.items()},
             "sizes": {str(k): int(v) for k, v in self.sizes.items()},
@@ -123,6 +210,8 @@ class InstabilityResult(Result):
 
     def summary(self) -> str:
         lines = [f"{self.verdict}: {self.evidence}"]
+        if not self.modal:
+            lines = [self.verdict, f"  divergence: {self.divergence_verdict}: {self.evidence}"]
         for k, m in enumerate(self.modes[:SUMMARY_MODES]):
             if self.modal:
                 lines.append(f"  mode {k}: σ = {m.sigma:.10g}, angular frequency ω = {m.frequency:.6g}, "
@@ -132,6 +221,13 @@ class InstabilityResult(Result):
                          f"slipping nodes {m.support.tolist()}, residual {m.residual:.1e}")
         if len(self.modes) > SUMMARY_MODES:
             lines.append(f"  ... {len(self.modes) - SUMMARY_MODES} more modes")
+        if not self.modal:
+            lines.append(f"  flutter: {self.flutter_verdict}: {self.flutter_evidence}")
+            for k, m in enumerate(self.flutter_modes[:SUMMARY_MODES]):
+                lines.append(f"  flutter mode {k}: σ = {_complex(m.sigma)}, growth rate {m.growth_rate:.6g}, "
+                             f"frequency {m.frequency:.6g}, residual {m.residual:.1e}")
+            if len(self.flutter_modes) > SUMMARY_MODES:
+                lines.append(f"  ... {len(self.flutter_modes) - SUMMARY_MODES} more flutter modes")
         return "\n".join(lines)
 
     def summary_rows(self, scene, *, ranks: int = 1) -> list[tuple[str, str]]:
@@ -155,6 +251,8 @@ class InstabilityResult(Result):
         if not self.success:
             verdict = f"FAILED ({self.status})" + ("" if self.stable is None else f", last verdict {verdict}")
         rows.append(("verdict", verdict))
+        if not self.modal:
+            rows.append(("divergence", self.divergence_verdict))
         if self.evidence:
             rows.append(("evidence", self.evidence))
         if self.message and self.message != self.evidence:
@@ -179,9 +277,28 @@ class InstabilityResult(Result):
                 rows.append(("", f"  ... {n - SUMMARY_MODES} more (all in results.h5)"))
         else:
             rows.append(("modes", "none"))
+        if not self.modal:
+            rows.append(("flutter", self.flutter_verdict))
+            if self.flutter_evidence:
+                rows.append(("flutter evidence", self.flutter_evidence))
+            if self.flutter_modes:
+                n = len(self.flutter_modes)
+                rows.append(("flutter modes", f"{n} certified flutter mode{'s' if n != 1 else ''} "
+                                              "(σ complex, λ = √σ, fastest first)"))
+                rows.append(("", f"  {'#':>3}  {'σ':>30}  {'growth Re λ':>12}  {'freq. |Im λ|':>12}  "
+                                 f"{'residual':>9}"))
+                for k, m in enumerate(self.flutter_modes[:SUMMARY_MODES]):
+                    rows.append(("", f"  {k:>3}  {_complex(m.sigma):>30}  {m.growth_rate:>12.6g}  "
+                                     f"{m.frequency:>12.6g}  {m.residual:>9.1e}"))
+                if n > SUMMARY_MODES:
+                    rows.append(("", f"  ... {n - SUMMARY_MODES} more (all in results.h5)"))
         if self.timings:
             rows.append(("timings", ", ".join(f"{k} {seconds(float(v))}" for k, v in self.timings.items())))
         return rows
+
+
+def _complex(z: complex) -> str:
+    return f"{z.real:.10g} {'+' if z.imag >= 0 else '−'} {abs(z.imag):.6g}i"
 
 
 def states_compact(states) -> str:

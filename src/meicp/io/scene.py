@@ -74,6 +74,7 @@ The whole schema, with defaults (``required`` = no default)::
     nev = <none>                  # eigenpairs per eigen-solve (integer >= 1), optional
     tol = <none>                  # certificate tolerance in (0, 0.01], optional
     max_iterations = <none>       # integer >= 1, optional
+    flutter = true                # also decide flutter of steady sliding (docs/flutter.md)
 
     [petsc]                       # free-form: PETSc options (without the leading dash and
     eps_tol = 1e-10               # without the solver's prefix); scalar values only
@@ -553,7 +554,8 @@ class _SceneParser:
                    lam_min=t.number("lam_min", None, nonnegative=True),
                    nev=t.integer("nev", None, minimum=1),
                    tol=t.number("tol", None, positive=True),
-                   max_iterations=t.integer("max_iterations", None, minimum=1))
+                   max_iterations=t.integer("max_iterations", None, minimum=1),
+                   flutter=t.boolean("flutter", True))
         t.done()
         if s.tol is not None and s.tol > MAX_TOL:
             self.fail("solver.tol", f"must be <= {MAX_TOL:g} (a relative certificate tolerance; a looser "

@@ -5,7 +5,7 @@ everything in "Main Stage"::
         K, M = assemble(model, comm)
 
 The phases of ``meicp solve`` are ``static``, ``assemble``, ``reduce``, ``eigen``,
-``critical_friction`` and ``write`` (:data:`PHASES`).  A stage is registered once per name
+``flutter``, ``critical_friction`` and ``write`` (:data:`PHASES`).  A stage is registered once per name
 and pushed on every rank that enters the block (PETSc's event log expects the ranks to
 agree); pushing costs nothing measurable when no log is requested.
 """
@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from . import import_petsc
 
 #: the stage names meicp uses, in the order a run meets them
-PHASES = ("static", "assemble", "reduce", "eigen", "critical_friction", "write")
+PHASES = ("static", "assemble", "reduce", "eigen", "flutter", "critical_friction", "write")
 
 _STAGES: dict = {}
 

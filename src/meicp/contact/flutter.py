@@ -1,0 +1,418 @@
+"""Flutter of steady sliding (docs/flutter.md): non-real eigenvalues of the sliding pencil.
+
+With the slipping contacts sliding on, the linearised motion is ``(σB − A)x = 0`` on the
+retained DOFs: the MEiCP's pencil ``A = −P̃KQ̃``, ``B = P̃MQ̃`` with every slip row an
+equality (the slip rate free in sign while sliding goes on).  A is nonsymmetric once μ > 0,
+and a non-real σ gives λ = √σ with Re λ > 0: a growing oscillation.  Which contacts count:
+slipping ones (base and frictional interfaces) slide, sticking ones are held, separated
+ones are free; a grazing contact has no linearisation, so two branches bracket it
+(:func:`grazing_branches`): ``separated`` and ``sliding`` — flutter is claimed only when
+every branch has it, excluded only when none has it.
+
+Two paths, both ending in :class:`~meicp.contact.result.FlutterMode` s with their
+backward errors (a mode above :data:`RESIDUAL_TOL` is never reported):
+
+- **dense** (retained DOFs ≤ :data:`DENSE_MAX`): every eigenvalue by LAPACK (QR on
+  D^{-1/2}AD^{-1/2} when B = D is diagonal, else QZ), each with the rounding radius
+  ``r = n·u·(‖A‖₁ + |σ|‖B‖₁)·κ(σ)``, κ from the left and right eigenvectors: non-real when
+  |Im σ| > r; certified real when |Im σ| ≤ r and its disk meets no other; else borderline.
+  flutter = True with a certified non-real mode, False when every eigenvalue is certified
+  real (a proof), None otherwise.  A symmetric A with symmetric positive definite B is
+  proved flutter-free without QZ.
+- **search** (larger): complex shift-and-invert (:mod:`meicp.petsc.flutter`) at targets
+  taken from a dense *contact-strip proxy* of the scene (the fastest modes are slip waves
+  along the contact, whose σ hardly depends on the lattice's size), or on a λ-line when
+  no proxy exists.  It can prove flutter (a certified mode), never its absence: flutter is
+  True or None, and the evidence says which disks of the σ-plane were searched.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sl
+import scipy.sparse as sp
+
+from ..lattice.assembly import assemble_scipy
+from ..lattice.model import LatticeModel
+from ..petsc.comm import comm_size, mpi_comm
+from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
+from ..petsc.mat import is_petsc_mat, mat_from_scipy, to_dense
+from .maps import contact_sets, reduced_system
+from .problem import pencil_of
+from .result import FlutterMode, growth_frequency
+
+log = logging.getLogger("meicp")
+
+#: dense QZ up to this many retained DOFs (about 60 s at 2,000 and 7 min at 3,500 on one
+#: loaded core: docs/benchmarks.md, Flutter)
+DENSE_MAX = 2500
+#: a flutter mode's backward error must be at most this to be reported
+RESIDUAL_TOL = 1e-10
+#: large-scale path: |Im σ| must exceed MARGIN·η·(‖A‖₁/‖B‖₁ + |σ|) (η the backward error)
+#: to count as non-real; MARGIN stands for the unknown condition number (κ ≤ 1.1e3 measured
+#: on the dense cases)
+MARGIN = 1e6
+#: large-scale path defaults: proxy targets, eigenpairs per target, Krylov basis
+SEARCH_TARGETS = 3
+SEARCH_NEV = 4
+SEARCH_NCV = 16
+#: at and above this many retained DOFs one target with nev 2, ncv 12 (cost ≈ 3 eigen-solves)
+SEARCH_LARGE = 100_000
+#: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
+#: next to the contact for it to count as contact-localised
+PROXY_NX = 32
+PROXY_ROWS = 8
+PROXY_LOCALISED = 0.6
+PROXY_NEAR_ROWS = 3
+#: a σ within this relative distance of an earlier one is the same eigenvalue
+SAME = 1e-9
+
+
+@dataclass
+class PencilFlutter:
+    """The flutter analysis of one sliding pencil: ``flutter`` (True / False / None),
+    ``modes`` (σ, x on the retained DOFs, backward error, radius, found_by), fastest first,
+    and ``evidence`` (what was searched, what it proves)."""
+
+    flutter: bool | None
+    modes: list = field(default_factory=list)
+    evidence: str = ""
+    complete: bool = False
+    counts: dict = field(default_factory=dict)
+    rejected: list = field(default_factory=list)
+
+
+def _norm1(M: np.ndarray) -> float:
+    return float(np.abs(M).sum(axis=0).max()) if M.size else 0.0
+
+
+def _fastest_first(modes: list) -> list:
+    return sorted(modes, key=lambda m: (-growth_frequency(m[0])[0], -abs(m[0].imag)))
+
+
+def _normalise(x: np.ndarray) -> np.ndarray:
+    """‖x‖₂ = 1 with its largest entry real positive (a canonical phase)."""
+    x = np.asarray(x, dtype=complex)
+    k = int(np.argmax(np.abs(x)))
+    return x / (x[k] / abs(x[k]) * np.linalg.norm(x)) if x[k] != 0 else x
+
+
+def backward_error(A, B, sigma: complex, x: np.ndarray, norm_A: float, norm_B: float) -> float:
+    """‖Ax − σBx‖₂ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖₂) (A, B dense or SciPy)."""
+    r = A @ x - sigma * (B @ x)
+    return float(np.linalg.norm(r) / ((norm_A + abs(sigma) * norm_B) * np.linalg.norm(x)))
+
+
+def _symmetric_definite(A: np.ndarray, B: np.ndarray) -> bool:
+    if not (np.array_equal(A, A.T) and np.array_equal(B, B.T)):
+        return False
+    try:
+        np.linalg.cholesky(B)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: float | None = None) -> PencilFlutter:
+    """Every flutter mode of the pencil (A, B) (NumPy or SciPy, serial) and the verdict, a
+    proof either way unless borderline (module docstring).  ``radius_factor``: the multiple
+    of u·(‖A‖ + |σ|‖B‖)·κ that counts as rounding (default n)."""
+    A = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
+    B = B.toarray() if sp.issparse(B) else np.asarray(B, dtype=float)
+    n = A.shape[0]
+    if n == 0:
+        return PencilFlutter(False, evidence="no retained DOF: nothing can move (a proof)", complete=True)
+    if _symmetric_definite(A, B):
+        return PencilFlutter(False, evidence="symmetric A and symmetric positive definite B: every σ is real "
+                                             "(no friction coupling reaches the retained DOFs) — a proof",
+                             complete=True)
+    norm_A, norm_B = _norm1(A), _norm1(B)
+    d = np.diag(B)
+    if np.all(d > 0) and np.count_nonzero(B) == np.count_nonzero(d):
+        s = 1.0 / np.sqrt(d)
+        C = s[:, None] * A * s[None, :]
+        w, VL, VR = sl.eig(C, left=True, right=True)
+        X = s[:, None] * VR
+        kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
+                 / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), VR)), 1e-300))
+        scale = _norm1(C) + np.abs(w)
+        infinite = np.zeros(n, dtype=bool)
+        how = "dense QR of D^-1/2 A D^-1/2 (B = D diagonal)"
+    else:
+        (alpha, beta), VL, VR = sl.eig(A, B, left=True, right=True, homogeneous_eigvals=True)
+        infinite = np.abs(beta) <= n * np.finfo(float).eps * np.abs(alpha)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
+        X = VR
+        kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
+                 / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), B @ VR)), 1e-300))
+        scale = norm_A + np.where(infinite, 0.0, np.abs(w)) * norm_B
+        how = "dense QZ of (A, B)"
+    factor = float(n) if radius_factor is None else radius_factor
+    radius = np.where(infinite, np.inf, factor * (np.finfo(float).eps / 2) * scale * kappa)
+    finite = ~infinite
+    nonreal = finite & (np.abs(w.imag) > radius)
+    near_axis = finite & ~nonreal
+    certified_real = np.zeros(n, dtype=bool)
+    fin = np.flatnonzero(finite)
+    order = fin[np.argsort(w[fin].real)]
+    re = w[order].real
+    reach = radius[order].max() if order.size else 0.0
+    for i in np.flatnonzero(near_axis):  # certified when its disk meets no other eigenvalue's disk
+        lo = np.searchsorted(re, w[i].real - radius[i] - reach, "left")
+        hi = np.searchsorted(re, w[i].real + radius[i] + reach, "right")
+        near = order[lo:hi]
+        near = near[near != i]
+        certified_real[i] = not np.any(np.abs(w[near] - w[i]) <= radius[near] + radius[i])
+    borderline = near_axis & ~certified_real
+    out = PencilFlutter(None, complete=True)
+    for i in np.flatnonzero(nonreal & (w.imag > 0)):
+        res = backward_error(A, B, complex(w[i]), X[:, i], norm_A, norm_B)
+        if res <= residual_tol:
+            out.modes.append((complex(w[i]), _normalise(X[:, i]), res, float(radius[i]), how))
+        else:
+            out.rejected.append((complex(w[i]), res))
+    out.modes = _fastest_first(out.modes)
+    out.counts = {"eigenvalues": n, "nonreal_pairs": int(nonreal.sum()) // 2,
+                  "certified_real": int(certified_real.sum()), "borderline": int(borderline.sum()),
+                  "infinite": int(infinite.sum()), "rejected": len(out.rejected)}
+    out.flutter = True if out.modes else (None if borderline.any() or out.rejected else False)
+    infinite_note = f", {int(infinite.sum())} infinite (not modes)" if infinite.any() else ""
+    rejected_note = (f", {len(out.rejected)} non-real pair(s) failing the residual gate {residual_tol:g} "
+                     "(not reported)" if out.rejected else "")
+    out.evidence = (f"{how} of all {n} eigenvalues{infinite_note}: {out.counts['nonreal_pairs']} non-real pair(s), "
+                    f"{out.counts['certified_real']} certified real, {out.counts['borderline']} borderline "
+                    f"(non-reality at rounding level){rejected_note}"
+                    + (" — a proof" if out.flutter is not None else ": undecided"))
+    return out
+
+
+def lambda_line_targets(growth: float, frequencies) -> list[complex]:
+    """Targets σ = (g + iω)² on the vertical line Re λ = g of the λ-plane: a sweep that needs
+    no proxy (the large-scale path without one, and the benchmark's independent check)."""
+    return [complex((growth + 1j * w) ** 2) for w in frequencies]
+
+
+def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int | None = SEARCH_NCV,
+                   tol: float = 1e-12, residual_tol: float = RESIDUAL_TOL, options: dict | None = None,
+                   why_targets: str = "") -> PencilFlutter:
+    """Flutter modes of (A, B) (PETSc Mats, or SciPy distributed here over ``comm``) near the
+    complex ``targets``: True with certified modes, else None — never a proof of absence.
+    Collective."""
+    own = not is_petsc_mat(A)
+    if own:
+        comm = mpi_comm(comm)
+        A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
+    try:
+        with SlidingPencilOps(A, B) as ops:
+            if ops.symmetric_with_diagonal_mass():
+                return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
+                                                     "a proof")
+            bound = ops.skew_bound()
+            modes, rejected, disks, borderline = [], [], [], 0
+            for tau in targets:
+                tau = complex(tau)
+                tau = tau.conjugate() if tau.imag < 0 else tau
+                pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, options=options)
+                disks.append((tau, info["radius"], len(pairs)))
+                for sigma, x, res in pairs:
+                    margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
+                    if res > residual_tol:
+                        rejected.append((sigma, res))
+                    elif abs(sigma.imag) > margin:
+                        if not any(abs(sigma - m[0]) <= SAME * abs(m[0]) for m in modes):
+                            modes.append((sigma, _normalise(x), res, margin, f"shift-invert at τ = {tau:.6g}"))
+                    elif sigma.imag != 0:
+                        borderline += 1
+    finally:
+        if own:
+            A.destroy()
+            B.destroy()
+    out = PencilFlutter(True if modes else None, _fastest_first(modes), rejected=rejected,
+                        counts={"targets": len(disks), "rejected": len(rejected), "borderline": borderline})
+    text = "; ".join(f"|σ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} σ)" for t, r, k in disks)
+    out.evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}: the eigenvalues in {text}"
+                    + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
+                    + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else ""))
+    if modes:
+        out.evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
+                         "is not (not a proof of the growth rate)")
+    else:
+        out.evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
+    return out
+
+
+# -- the scene level: branches, proxy, the choice of path -------------------------------------
+
+def _sliding_signs(states) -> list:
+    signs = sorted({s for s in states if s in ("slip+", "slip-")})
+    return signs if len(signs) == 1 else ["slip+", "slip-"]
+
+
+def grazing_branches(sets) -> list[tuple[str, list]]:
+    """[(label, contact lines with every grazing state replaced)]: one entry labelled ""
+    without grazing contacts; else ``separated`` (the open side: free) and ``sliding`` (the
+    loaded side: v_n = 0 and the friction row in the sliding direction of that contact line —
+    the sign its slipping contacts share, each sign in turn when they disagree or none
+    slips)."""
+    if not any("grazing" in cs.states for cs in sets):
+        return [("", list(sets))]
+    branches = [("separated", [dataclasses.replace(cs, states=tuple("separated" if s == "grazing" else s
+                                                                     for s in cs.states)) for cs in sets])]
+    choices = [_sliding_signs(cs.states) if "grazing" in cs.states else [None] for cs in sets]
+    for choice in itertools.product(*choices):
+        lines = [cs if sign is None else dataclasses.replace(cs, states=tuple(sign if s == "grazing" else s
+                                                                               for s in cs.states))
+                 for cs, sign in zip(sets, choice)]
+        label = "sliding " + ",".join(f"{cs.name}:{c}" for cs, c in zip(sets, choice) if c is not None)
+        branches.append((label, lines))
+    return branches
+
+
+def combine_branches(flags) -> bool | None:
+    """Flutter over grazing branches: True if every branch has it, False if none can."""
+    flags = list(flags)
+    if all(f is True for f in flags):
+        return True
+    if all(f is False for f in flags):
+        return False
+    return None
+
+
+def strip_proxy(scene, base_states):
+    """The contact-strip proxy: the bottom :data:`PROXY_ROWS` rows (the cut held fixed) and
+    :data:`PROXY_NX` columns from the middle of the base, with the base's resolved states.
+    None when the scene has no base contact, a frictional interface or an embedded band."""
+    if scene.contact is None or scene.embedded or any(i.kind == "frictional" for i in scene.interfaces):
+        return None
+    nx = min(scene.nx, PROXY_NX)
+    left, kept = PROXY_ROWS, []
+    for layer in scene.layers:
+        if left <= 0:
+            break
+        kept.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
+        left -= kept[-1].rows
+    cut = sum(layer.rows for layer in kept) < scene.ny
+    start = (len(base_states) - nx) // 2
+    return dataclasses.replace(
+        scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=tuple(kept),
+        interfaces=tuple(i for i in scene.interfaces if i.index < len(kept) - 1),
+        boundary=dataclasses.replace(scene.boundary, top="fixed") if cut else scene.boundary,
+        contact=dataclasses.replace(scene.contact, states=tuple(base_states[start:start + nx])))
+
+
+def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[complex]:
+    """Up to ``count`` targets: σ of the proxy's fastest contact-localised flutter modes, at
+    least 0.1|σ| apart (all its modes when none is localised); [] without a proxy."""
+    proxy = strip_proxy(scene, base_states)
+    if proxy is None:
+        return []
+    model = LatticeModel(proxy)
+    K, M = assemble_scipy(model)
+    red = reduced_system(model, contact_sets(proxy, model), ())
+    found = dense_flutter(-(red.P @ K @ red.Q), red.P @ M @ red.Q)
+
+    def near_contact(x):
+        energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))
+        return energy[:PROXY_NEAR_ROWS].sum() / energy.sum()
+
+    candidates = [m for m in found.modes if near_contact(m[1]) >= PROXY_LOCALISED] or found.modes
+    targets = []
+    for m in candidates:
+        if all(abs(m[0] - t) > 0.1 * abs(t) for t in targets):
+            targets.append(m[0])
+        if len(targets) == count:
+            break
+    return targets
+
+
+def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options: dict | None = None,
+                   targets=None, **search) -> PencilFlutter:
+    """The flutter analysis of one sliding pencil ``pen`` (a
+    :class:`~meicp.contact.problem.Pencil`, every contact state resolved): dense up to
+    ``dense_max`` retained DOFs (on rank 0, broadcast), else the search at ``targets`` (default:
+    the proxy's, else a λ-line).  Collective."""
+    comm = mpi_comm(comm)
+    n = int(pen.maps.retained.size)
+    if n == 0:
+        return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True)
+    if n <= dense_max:
+        A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
+        if comm is None or comm_size(comm) == 1:
+            return dense_flutter(A, B)
+        return comm.bcast(dense_flutter(A, B) if comm.Get_rank() == 0 else None, root=0)
+    why = ""
+    if targets is None:
+        base = next((cs.states for cs in pen.sets if cs.name == "base"), ())
+        targets = proxy_targets(scene, list(base), 1 if n >= SEARCH_LARGE else SEARCH_TARGETS) if base else []
+        why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
+        if not targets:
+            targets = lambda_line_targets(0.05, np.linspace(0.5, 2.5, 3))
+            why = " on the λ-line Re λ = 0.05, ω = 0.5 … 2.5 (no proxy for this scene)"
+    if n >= SEARCH_LARGE:
+        search.setdefault("nev", 2)
+        search.setdefault("ncv", 12)
+    return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
+
+
+def _to_mode(entry, maps, branch: str) -> FlutterMode:
+    sigma, x, res, radius, how = entry
+    u = maps.Q @ x
+    support, interface = [], {}
+    for name, idx, kind in maps.pair_of:
+        if kind == "t":
+            (support if name == "base" else interface.setdefault(name, [])).append(idx)
+    return FlutterMode(sigma, _normalise(u), res, np.unique(np.array(support, dtype=np.int64)),
+                       {k: np.unique(v) for k, v in interface.items()}, radius, branch, how)
+
+
+@dataclass
+class FlutterVerdict:
+    """What :func:`analyze_flutter` gives ``analyze``: the verdict, the modes in natural
+    numbering (fastest first), the evidence and the seconds it took."""
+
+    flutter: bool | None
+    modes: list
+    evidence: str
+    seconds: float = 0.0
+
+
+def analyze_flutter(K, M, model, sets, scene, comm=None, *, pencil=None, static=None,
+                    options: dict | None = None, **kwargs) -> FlutterVerdict:
+    """The flutter verdict of a scene's steady sliding: one pencil per grazing branch
+    (``pencil``: the MEiCP's own, reused when no contact grazes), the verdicts combined.
+    Collective on ``comm``."""
+    t0 = time.perf_counter()
+    verdicts, modes, evidences = [], [], []
+    for label, lines in grazing_branches(sets):
+        own = pencil is None or label
+        pen = pencil_of(K, M, model, lines, (), static) if own else pencil
+        try:
+            part = pencil_flutter(pen, scene, comm, options=options, **kwargs)
+            modes += [_to_mode(m, pen.maps, label) for m in part.modes]
+        finally:
+            if own:
+                pen.destroy()
+        verdicts.append(part.flutter)
+        evidences.append((f"[{label}] " if label else "") + part.evidence)
+    modes.sort(key=lambda m: (-m.growth_rate, -abs(m.sigma.imag)))
+    evidence = " | ".join(evidences)
+    if len(verdicts) > 1:
+        evidence = ("grazing contacts, bracketed by a separated and a sliding branch (flutter only if every "
+                    "branch has it): " + evidence)
+    return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0)
+
+
+def not_analysed(reason: str) -> FlutterVerdict:
+    """The verdict when flutter was not looked at (``flutter=False`` in ``analyze``)."""
+    return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
+
+
+__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterVerdict", "PencilFlutter", "analyze_flutter", "dense_flutter",
+           "grazing_branches", "lambda_line_targets", "pencil_flutter", "proxy_targets", "search_flutter"]

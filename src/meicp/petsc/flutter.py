@@ -1,0 +1,208 @@
+"""Flutter eigenpairs of a distributed sliding pencil with SLEPc (docs/flutter.md §4).
+
+The fastest flutter modes sit inside the spectrum among real and weakly complex
+eigenvalues, so only a *complex* shift isolates them.  Debian's PETSc here is real-scalar,
+so the complex shift-and-invert works on the real equivalent form of order 2n,
+
+    K_τ = kron(A − αB, I₂) + β·kron(B, [[0, 1], [−1, 0]]),   B₂ = kron(B, I₂),   τ = α + iβ,
+
+interleaved (DOF i → rows 2i, 2i+1: every rank keeps its own rows).  The real pencil
+(K_τ, B₂) has the eigenvalues {σ − τ} ∪ {σ − τ̄}; shift-and-invert at target 0 (MUMPS LU of
+K_τ, with ICNTL(15) = −2: the matrix comes in 2×2 blocks, so MUMPS analyses the node graph,
+about 3× faster) returns the σ nearest τ.  For an eigenvector z = [z₁; z₂], x₊ = z₁ + i z₂
+belongs to σ = τ + μ and x₋ = z₁ − i z₂ to σ = τ̄ + μ; the one of larger norm is taken and
+its backward error is recomputed on (A, B) itself, independently of SLEPc's estimate.
+
+Options: prefix :data:`~meicp.petsc.options.FLUTTER` (``-meicp_flutter_eps_*``,
+``-meicp_flutter_st_*``), code defaults < the scene's ``[petsc]`` table < command line,
+``setFromOptions`` last.  Every function is collective on the matrices' communicator; the
+EPS and the 2n matrices are destroyed before each solve returns.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import import_petsc, import_slepc
+from .comm import mpi_comm
+from .mat import mat_from_local_csr, vec_to_numpy
+from .options import FLUTTER, OptionsScope
+
+_J2 = sp.csr_matrix(np.array([[0.0, 1.0], [-1.0, 0.0]]))
+_I2 = sp.identity(2, format="csr")
+
+
+def local_csr(A) -> sp.csr_matrix:
+    """This rank's rows of a PETSc AIJ matrix as SciPy CSR (global columns)."""
+    indptr, indices, data = A.getValuesCSR()
+    return sp.csr_matrix((data, indices, indptr), shape=(A.getLocalSize()[0], A.getSize()[1]))
+
+
+def _allreduce(comm, value, op="sum"):
+    comm = mpi_comm(comm)
+    if comm is None:
+        return value
+    from mpi4py import MPI
+
+    return comm.allreduce(value, op={"sum": MPI.SUM, "max": MPI.MAX}[op])
+
+
+def shift_defaults(nev: int, ncv: int | None, tol: float) -> dict:
+    """Code defaults of one complex shift-and-invert solve on the 2n form (nev, ncv there)."""
+    defaults = {"eps_gen_non_hermitian": True, "eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True,
+                "eps_tol": tol, "eps_max_it": 500, "st_type": "sinvert", "st_ksp_type": "preonly",
+                "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps", "st_mat_mumps_icntl_7": 2,
+                "st_mat_mumps_icntl_15": -2}
+    if ncv:
+        defaults["eps_ncv"] = ncv
+    return defaults
+
+
+class SlidingPencilOps:
+    """The distributed pencil (A, B) with what every solve needs: ‖A‖₁, ‖B‖₁, this rank's
+    rows as SciPy CSR, and work vectors for residuals on (A, B).  Collective; ``destroy``
+    (or a ``with`` block) frees the work vectors, not A and B."""
+
+    def __init__(self, A, B):
+        PETSc = import_petsc()
+        self.A, self.B = A, B
+        self.norm_A = A.norm(PETSc.NormType.NORM_1)
+        self.norm_B = B.norm(PETSc.NormType.NORM_1)
+        self.A_local, self.B_local = local_csr(A), local_csr(B)
+        self._work = [A.createVecRight(), A.createVecRight(), A.createVecLeft(), A.createVecLeft(),
+                      A.createVecLeft()]
+
+    def __enter__(self) -> "SlidingPencilOps":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+    def destroy(self) -> None:
+        for v in self._work:
+            v.destroy()
+        self._work = []
+
+    def residual(self, sigma: complex, x_local: np.ndarray) -> float:
+        """Backward error ‖Ax − σBx‖ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖) of (σ, x), x given by this
+        rank's entries.  Collective."""
+        a, b = sigma.real, sigma.imag
+        xr, xi, t1, t2, t3 = self._work
+        xr.setArray(np.ascontiguousarray(x_local.real))
+        xi.setArray(np.ascontiguousarray(x_local.imag))
+        # real part A xr − a B xr + b B xi; imaginary part A xi − a B xi − b B xr
+        self.A.mult(xr, t1)
+        self.B.mult(xr, t2)
+        self.B.mult(xi, t3)
+        t1.axpy(-a, t2)
+        t1.axpy(b, t3)
+        re2 = t1.norm() ** 2
+        self.A.mult(xi, t1)
+        t1.axpy(-a, t3)
+        t1.axpy(-b, t2)
+        im2 = t1.norm() ** 2
+        x_norm = np.sqrt(xr.norm() ** 2 + xi.norm() ** 2)
+        return float(np.sqrt(re2 + im2) / ((self.norm_A + abs(sigma) * self.norm_B) * x_norm))
+
+    def gather(self, x_local: np.ndarray) -> np.ndarray:
+        """The full complex vector on every rank.  Collective."""
+        xr, xi = self._work[:2]
+        xr.setArray(np.ascontiguousarray(x_local.real))
+        xi.setArray(np.ascontiguousarray(x_local.imag))
+        return vec_to_numpy(xr) + 1j * vec_to_numpy(xi)
+
+    def symmetric_with_diagonal_mass(self) -> bool:
+        """A exactly symmetric and B diagonal positive: every σ is real.  Collective."""
+        if diagonal_of(self.B, self.B_local) is None:
+            return False
+        return bool(self.A.isSymmetric(0.0))
+
+    def skew_bound(self) -> float | None:
+        """β ≥ |Im σ| for every eigenvalue when B = D is diagonal positive: Im σ =
+        Im(yᴴW y)/(yᴴy) with y = D^{1/2}x and W = D^{-1/2}·skew(A)·D^{-1/2}, so |Im σ| ≤
+        ‖W‖₂ ≤ ‖W‖₁ (one pass over the rows).  None when B is not diagonal.  Collective."""
+        PETSc = import_petsc()
+        d = diagonal_of(self.B, self.B_local)
+        if d is None:
+            return None
+        comm = mpi_comm(self.A.getComm())
+        scale = 1.0 / np.sqrt(d)
+        scale_all = scale if comm is None else np.concatenate(comm.allgather(scale))
+        lo, hi = self.A.getOwnershipRange()
+        AT = self.A.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() works in place
+        try:
+            AT_local = local_csr(AT)
+        finally:
+            AT.destroy()
+        W = sp.diags(scale_all[lo:hi]) @ (0.5 * (self.A_local - AT_local)) @ sp.diags(scale_all)
+        rows = np.asarray(abs(W).sum(axis=1)).ravel()
+        return float(_allreduce(self.A.getComm(), float(rows.max()) if rows.size else 0.0, "max"))
+
+
+def diagonal_of(B, B_local=None):
+    """This rank's part of B's diagonal when B is diagonal with positive entries, else None.
+    Collective."""
+    B_local = local_csr(B) if B_local is None else B_local
+    lo, _ = B.getOwnershipRange()
+    rows = np.arange(B_local.shape[0])
+    d = np.asarray(B_local[rows, lo + rows]).ravel()
+    off_diagonal = int(np.count_nonzero(B_local.data)) - int(np.count_nonzero(d))
+    bad = int(off_diagonal != 0 or np.any(d <= 0))
+    return None if _allreduce(B.getComm(), bad) else d
+
+
+def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, ncv: int | None = 12,
+                        tol: float = 1e-12, options: dict | None = None) -> tuple[list, dict]:
+    """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
+    shift-and-invert on the real 2n form (every σ of the real form comes with its
+    conjugate: nev, ncv are doubled there).  Returns ``(pairs, info)``: pairs = [(σ with
+    Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info = {``radius``:
+    the largest |σ − τ| among the converged (the disk searched), ``nconv``, ``iterations``,
+    ``seconds``}.  ``options``: the scene's ``[petsc]`` table (keys without the prefix).
+    Collective."""
+    SLEPc = import_slepc()
+    t0 = time.perf_counter()
+    tau = complex(tau)
+    A = ops.A
+    n = A.getSize()[0]
+    K_local = (sp.kron(ops.A_local - tau.real * ops.B_local, _I2, format="csr")
+               + tau.imag * sp.kron(ops.B_local, _J2, format="csr"))
+    K = mat_from_local_csr(A.getComm(), K_local, 2 * n)
+    B2 = mat_from_local_csr(A.getComm(), sp.kron(ops.B_local, _I2, format="csr"), 2 * n)
+    eps = SLEPc.EPS().create(comm=A.getComm())
+    zr = zi = None
+    try:
+        eps.setOperators(K, B2)
+        with OptionsScope(FLUTTER, shift_defaults(2 * nev, ncv and 2 * ncv, tol), options) as scope:
+            scope.configure(eps)  # setFromOptions, last
+            eps.solve()
+        nconv = eps.getConverged()
+        info = {"nconv": nconv, "iterations": eps.getIterationNumber()}
+        zr, zi = K.createVecRight(), K.createVecRight()
+        pairs, seen, radius = [], [], 0.0
+        comm = mpi_comm(A.getComm())
+        for i in range(nconv):
+            mu = complex(eps.getEigenpair(i, zr, zi))
+            radius = max(radius, abs(mu))
+            z = zr.getArray(readonly=True) + 1j * zi.getArray(readonly=True)
+            x_plus, x_minus = z[0::2] + 1j * z[1::2], z[0::2] - 1j * z[1::2]
+            norms = [float(np.vdot(x, x).real) for x in (x_plus, x_minus)]
+            if comm is not None:
+                norms = [comm.allreduce(v) for v in norms]
+            sigma, x = (tau + mu, x_plus) if norms[0] >= norms[1] else (tau.conjugate() + mu, x_minus)
+            if sigma.imag < 0:
+                sigma, x = sigma.conjugate(), x.conj()
+            if any(abs(sigma - s) <= 1e-10 * max(1.0, abs(s)) for s in seen):
+                continue  # the other member of a conjugate pair
+            seen.append(sigma)
+            pairs.append((sigma, ops.gather(x), ops.residual(sigma, x)))
+        info["radius"] = radius
+        info["seconds"] = time.perf_counter() - t0
+        return pairs, info
+    finally:
+        for obj in (eps, K, B2, zr, zi):
+            if obj is not None:
+                obj.destroy()
