@@ -72,9 +72,10 @@ def test_flutter_lattice_analyze_says_no_divergence_mode():
     assert np.abs(sla.eigvals(A, B).imag).max() > 0.1
     assert _sigmas(A, B, J) == []
     r = meicp.analyze(sc)  # enumeration: a proof that no divergence mode exists
-    assert r.stable is True and r.modes == [] and "no solution with σ ≥ 0" in r.evidence
+    assert r.divergence is False and r.modes == [] and "no solution with σ ≥ 0" in r.evidence
+    assert r.flutter is True and r.stable is False  # the complex σ: flutter of steady sliding (issue 15)
     r = meicp.analyze(sc, method="active-set")  # nonsymmetric: no proof, and it says so
-    assert r.stable is None and r.status == "inconclusive" and r.modes == []
+    assert r.divergence is None and r.status == "inconclusive" and r.modes == []
 
 
 # ----------------------------------------------------------------------------- μ across μ_c
@@ -90,7 +91,7 @@ def test_just_below_mu_c_no_negative_sigma_reported_as_mode(method):
     res = meicp.solve_eicp(A, B, J=J, method=method, lam_min=0.0)
     assert res.solutions == [] and not res.success
     r = meicp.analyze(sc)
-    assert r.stable is True and r.modes == []
+    assert r.divergence is False and r.modes == []
     sc = fm.scene(mu=MU_C * (1 + 1e-6))  # just above: a genuine σ ≈ 5e-7 > 0 mode
     res = meicp.solve_eicp(*fm.pencil(sc)[:2], J=J, method=method, lam_min=0.0)
     assert res.success and 0 < res.lam < 1e-5

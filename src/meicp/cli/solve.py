@@ -1,12 +1,14 @@
 """``meicp solve SCENE.toml [-o DIR] [--no-output] [--json] [--method M] [--target T] [--nev N]
-[--critical-friction] [-v|-q] [-- PETSc options]``.
+[--critical-friction] [--no-flutter] [-v|-q] [-- PETSc options]``.
 
 Loads the scene (a bad scene fails before any work, exit 2), runs
 :func:`meicp.contact.instability.analyze` on every rank of ``MPI.COMM_WORLD`` (a scene
 without contact gets its modal analysis), prints a summary (stdout, rank 0) and writes
 ``results.h5``, ``lattice.h5`` + ``lattice.xdmf`` and the PNGs to DIR (default
 ``out/<scene stem>``; see :mod:`meicp.io.results`).  ``--method``, ``--target`` and
-``--nev`` override the scene's ``[solver]`` table (recorded in results.h5).
+``--nev`` override the scene's ``[solver]`` table (recorded in results.h5); ``--no-flutter``
+skips the flutter analysis of steady sliding (docs/flutter.md): the divergence verdict
+alone, and the overall verdict cannot be STABLE.
 
 ``--json``: instead of the summary, one JSON document on stdout (nothing else goes there;
 :func:`solve_json`): the verdict, the modes with σ and support, μ_c when asked, the
@@ -72,6 +74,9 @@ def register(sub) -> None:
     p.add_argument("--nev", type=integer(1),
                    help="eigenpairs per SLEPc solve; the vibration modes of a scene without contact "
                         "(default: the scene's [solver] nev, else 4 / 6)")
+    p.add_argument("--no-flutter", action="store_true",
+                   help="skip the flutter analysis of steady sliding (complex σ; docs/flutter.md): "
+                        "flutter stays undecided, so the verdict cannot be STABLE")
     verbosity(p)
     p.set_defaults(run=run)
 
@@ -133,9 +138,13 @@ def summary_rows(scene, result, *, ranks: int = 1) -> list[tuple[str, str]]:
 
 
 def overrides(args) -> dict:
-    """The solver settings given on the command line (``--method``, ``--target``, ``--nev``)."""
-    return {name: getattr(args, name) for name in ("method", "target", "nev")
-            if getattr(args, name, None) is not None}
+    """The solver settings given on the command line (``--method``, ``--target``, ``--nev``,
+    ``--no-flutter`` as ``flutter = False``)."""
+    given = {name: getattr(args, name) for name in ("method", "target", "nev")
+             if getattr(args, name, None) is not None}
+    if getattr(args, "no_flutter", False):
+        given["flutter"] = False
+    return given
 
 
 def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=None, out=None) -> dict:
@@ -149,7 +158,7 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
                      "dofs": scene.n_dofs},
            "ranks": ranks, "overrides": overrides(args)}
     data = result.to_dict()
-    for key in ("message", "evidence"):
+    for key in ("message", "evidence", "flutter_evidence"):
         data[key] = cli_spelling(data[key])
     doc.update(data)
     if mu_c is None:
@@ -250,4 +259,5 @@ _DESCRIBE = {"results": "scene, versions, states, forces, modes, certificates, t
              "lattice": "lattice + mode shapes + contact states (HDF5)",
              "xdmf": "ParaView/meshio entry point for lattice.h5",
              "mode_png": "fastest mode on the deformed lattice",
+             "flutter_png": "fastest flutter mode (real and imaginary parts of its shape)",
              "contacts_png": "contact states and forces along each contact line"}

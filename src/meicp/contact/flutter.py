@@ -104,9 +104,15 @@ def _normalise(x: np.ndarray) -> np.ndarray:
 
 
 def backward_error(A, B, sigma: complex, x: np.ndarray, norm_A: float, norm_B: float) -> float:
-    """‖Ax − σBx‖₂ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖₂) (A, B dense or SciPy)."""
-    r = A @ x - sigma * (B @ x)
-    return float(np.linalg.norm(r) / ((norm_A + abs(sigma) * norm_B) * np.linalg.norm(x)))
+    """‖Ax − σBx‖₂ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖₂) (A, B dense or SciPy), evaluated on A/‖A‖₁ and
+    B/‖B‖₁ so that extreme scales do not overflow; inf when it still cannot be evaluated
+    (such a pair is never certified)."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        x = x / np.linalg.norm(x)
+        ratio = norm_B / norm_A
+        r = (A @ x) / norm_A - (sigma * ratio) * ((B @ x) / norm_B)
+        value = np.linalg.norm(r) / (1.0 + abs(sigma) * ratio)
+    return float(value) if np.isfinite(value) and np.isfinite(ratio) and ratio > 0 else float("inf")
 
 
 def _symmetric_definite(A: np.ndarray, B: np.ndarray) -> bool:
@@ -132,6 +138,17 @@ def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: fl
         return PencilFlutter(False, evidence="symmetric A and symmetric positive definite B: every σ is real "
                                              "(no friction coupling reaches the retained DOFs) — a proof",
                              complete=True)
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
+        return PencilFlutter(None, evidence="the pencil has entries that are not finite: undecided")
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            return _dense_spectrum(A, B, residual_tol, radius_factor)
+    except (np.linalg.LinAlgError, ValueError) as exc:  # QZ did not converge, or NaN came out
+        return PencilFlutter(None, evidence=f"the dense eigen-solve (LAPACK) failed ({exc}): undecided")
+
+
+def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_factor) -> PencilFlutter:
+    n = A.shape[0]
     norm_A, norm_B = _norm1(A), _norm1(B)
     d = np.diag(B)
     if np.all(d > 0) and np.count_nonzero(B) == np.count_nonzero(d):
@@ -147,8 +164,7 @@ def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: fl
     else:
         (alpha, beta), VL, VR = sl.eig(A, B, left=True, right=True, homogeneous_eigvals=True)
         infinite = np.abs(beta) <= n * np.finfo(float).eps * np.abs(alpha)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            w = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
+        w = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
         X = VR
         kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
                  / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), B @ VR)), 1e-300))
@@ -156,7 +172,9 @@ def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: fl
         how = "dense QZ of (A, B)"
     factor = float(n) if radius_factor is None else radius_factor
     radius = np.where(infinite, np.inf, factor * (np.finfo(float).eps / 2) * scale * kappa)
-    finite = ~infinite
+    radius = np.where(np.isfinite(radius), radius, np.inf)  # no bound: never certified either way
+    unresolved = ~infinite & ~np.isfinite(w)
+    finite = ~infinite & ~unresolved
     nonreal = finite & (np.abs(w.imag) > radius)
     near_axis = finite & ~nonreal
     certified_real = np.zeros(n, dtype=bool)
@@ -170,7 +188,7 @@ def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: fl
         near = order[lo:hi]
         near = near[near != i]
         certified_real[i] = not np.any(np.abs(w[near] - w[i]) <= radius[near] + radius[i])
-    borderline = near_axis & ~certified_real
+    borderline = (near_axis & ~certified_real) | unresolved
     out = PencilFlutter(None, complete=True)
     for i in np.flatnonzero(nonreal & (w.imag > 0)):
         res = backward_error(A, B, complex(w[i]), X[:, i], norm_A, norm_B)

@@ -11,6 +11,7 @@ In the output directory::
                     open the .xdmf in ParaView, Warp By Vector with ``mode_k`` (scale 1 = the
                     PNG's picture)
     mode.png        the fastest mode on the deformed lattice (or the "stable" lattice)
+    flutter_mode.png  the fastest flutter mode (real part of its shape; only when there is one)
     contacts.png    states (and forces) along each contact line (only when there is one)
 
 ``results.h5`` layout (strings are UTF-8; ``None`` is never stored: absent means unknown):
@@ -23,7 +24,9 @@ In the output directory::
                                    without contact), ``verdict`` (stable | unstable |
                                    undecided | no contact), ``stable`` (1 | 0 | -1 for
                                    undecided), ``evidence``, ``n_modes``, ``ranks``,
-                                   ``units_convention``
+                                   ``units_convention``, ``divergence`` and ``flutter``
+                                   (1 | 0 | -1 for undecided), ``flutter_evidence``,
+                                   ``n_flutter_modes``
 ``/scene``                         the scene as TOML text (the file's own text when known,
                                    else regenerated from the parsed scene)
 ``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
@@ -46,6 +49,11 @@ In the output directory::
                                    ``display_scale`` (m,), ``x`` (m, n_dofs) natural numbering
 ``/modes/mode_<k>``                ``support`` (base columns, i8), ``interface_support/<below>``;
                                    attributes sigma, growth_rate, residual, display_scale
+``/flutter_modes``                 (docs/flutter.md) ``sigma_real``, ``sigma_imag``,
+                                   ``growth_rate`` (Re sqrt(sigma)), ``frequency``
+                                   (|Im sqrt(sigma)|), ``residual``, ``radius`` (f,),
+                                   ``x_real``, ``x_imag`` (f, n_dofs), ``branch`` (f,) S;
+                                   ``mode_<k>/support``, ``mode_<k>/interface_support/<below>``
 ``/certificates``                  ``mode_residual`` (m,); attributes ``result_residual``,
                                    ``max_mode_residual``, ``eicp_method``, ``eicp_status``,
                                    ``eicp_message``, ``eicp_coverage`` (JSON)
@@ -59,8 +67,8 @@ computed)                          ``lower``, ``upper``, ``exact``, ``evidence``
 Every dataset carries CF-style ``long_name`` and ``units`` attributes; the model is
 dimensionless (``units = "1"``, the numbers in the scene's consistent system: see
 :mod:`meicp.io.lattice_output`), and the code datasets carry their legend as
-``flag_values`` / ``flag_meanings`` / ``legend``.  Later sections (flutter) are added as
-groups beside ``/modes``; readers ignore what they do not know.
+``flag_values`` / ``flag_meanings`` / ``legend``.  Later sections are added as groups
+beside ``/modes``; readers ignore what they do not know.
 
 Contact state codes (``/contact/*/code`` and the XDMF field ``contact_state``): 0 not a
 contact node, 1 stick, 2 slip+, 3 slip-, 4 separated, 5 grazing, -1 contact node whose state
@@ -119,6 +127,23 @@ DESCRIPTIONS = {
                                   "unit 2-norm"},
     ("modes", "support"): {"long_name": "columns of the base contacts whose slip is active"},
     ("modes", "interface_support"): {"long_name": "columns of the interface's contacts whose slip is active"},
+    ("flutter_modes", "sigma_real"): {"long_name": "real part of sigma = lambda^2 of each flutter mode (1/time^2)"},
+    ("flutter_modes", "sigma_imag"): {"long_name": "imaginary part of sigma (> 0: one mode per conjugate pair) "
+                                                   "(1/time^2)"},
+    ("flutter_modes", "growth_rate"): {"long_name": "growth rate Re sqrt(sigma) > 0 of each flutter mode (1/time)"},
+    ("flutter_modes", "frequency"): {"long_name": "angular frequency |Im sqrt(sigma)| of each flutter mode "
+                                                  "(1/time)"},
+    ("flutter_modes", "residual"): {"long_name": "backward error |Ax - sigma Bx| / ((|A|_1 + |sigma| |B|_1) |x|) "
+                                                 "of each flutter mode"},
+    ("flutter_modes", "radius"): {"long_name": "how far rounding may move sigma; |Im sigma| exceeds it (1/time^2)"},
+    ("flutter_modes", "x_real"): {"long_name": "real part of the complex flutter mode shape, natural DOF "
+                                               "numbering, unit 2-norm"},
+    ("flutter_modes", "x_imag"): {"long_name": "imaginary part of the complex flutter mode shape (a quarter "
+                                               "period after the real part)"},
+    ("flutter_modes", "branch"): {"long_name": "grazing branch of each flutter mode (empty: no grazing contact)"},
+    ("flutter_modes", "support"): {"long_name": "columns of the base contacts sliding in this flutter mode"},
+    ("flutter_modes", "interface_support"): {"long_name": "columns of the interface's contacts sliding in "
+                                                          "this flutter mode"},
     ("contact", "states"): {"long_name": "contact state of each column, left to right"},
     ("contact", "code"): STATE_FLAGS,
     ("contact", "nodes"): {"long_name": "node number j*nx + i of each base contact"},
@@ -149,7 +174,7 @@ FIELD_DESCRIPTIONS = {
 }
 #: file names inside the output directory (keys of the returned dict)
 FILES = {"results": "results.h5", "lattice": "lattice.h5", "xdmf": "lattice.xdmf",
-         "mode_png": "mode.png", "contacts_png": "contacts.png"}
+         "mode_png": "mode.png", "flutter_png": "flutter_mode.png", "contacts_png": "contacts.png"}
 STATIC_FIELDS = ("r_n", "r_t", "gap", "slip")
 
 
@@ -343,6 +368,16 @@ def _prepare(scene: Scene, result) -> dict:
         modes.append({"mode": m, "sigma": sigma, "growth_rate": float(m.growth_rate), "frequency": frequency, "x": x,
                       "support": support, "interface_support": isup,
                       "residual": float(getattr(m, "residual", float("nan")))})
+    flutter_modes = []
+    for k, m in enumerate(getattr(result, "flutter_modes", None) or []):
+        x = np.asarray(m.x, dtype=complex).ravel()
+        sigma = complex(m.sigma)
+        if x.size != n_dofs or not np.all(np.isfinite(x)) or not np.isfinite(sigma):
+            raise ProblemError(f"flutter mode {k}: x must have {n_dofs} finite values and sigma be finite")
+        flutter_modes.append({"mode": m, "sigma": sigma, "x": x,
+                              "support": _columns(f"flutter mode {k}: support", m.support, nx),
+                              "interface_support": {name: _columns(f"flutter mode {k}: interface_support", sup, nx)
+                                                    for name, sup in (m.interface_support or {}).items()}})
     static = getattr(result, "static", None)
     forces, iforces, static_u = {}, {}, None
     if static is not None:
@@ -379,7 +414,7 @@ def _prepare(scene: Scene, result) -> dict:
                 field[upper] = arr
                 if lower is not None:
                     field[lower] = arr
-    return {"lines": lines, "states": states, "modes": modes, "static": static, "forces": forces,
+    return {"lines": lines, "states": states, "modes": modes, "flutter_modes": flutter_modes, "static": static, "forces": forces,
             "interface_forces": iforces, "static_u": static_u, "code": code, "node_forces": node_forces}
 
 
@@ -458,7 +493,10 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "message": getattr(result, "message", ""), "iterations": getattr(result, "iterations", 0),
             "residual": getattr(result, "residual", float("nan")), "verdict": verdict,
             "stable": {True: 1, False: 0}.get(stable, -1), "evidence": getattr(result, "evidence", ""),
-            "n_modes": len(modes), "ranks": ranks, "analysis": analysis, "units_convention": UNITS_CONVENTION})
+            "n_modes": len(modes), "ranks": ranks, "analysis": analysis, "units_convention": UNITS_CONVENTION,
+            **{name: {True: 1, False: 0}.get(getattr(result, name, None), -1) for name in ("divergence", "flutter")},
+            "flutter_evidence": getattr(result, "flutter_evidence", ""),
+            "n_flutter_modes": len(prep["flutter_modes"])})
         f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
 
         g = f.create_group("scene_summary")
@@ -540,6 +578,8 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             for name, sup in m["interface_support"].items():
                 mg.create_dataset(f"interface_support/{name}", data=sup)
 
+        _write_flutter_modes(f.create_group("flutter_modes"), prep["flutter_modes"], scene.n_dofs)
+
         g = f.create_group("certificates")
         res = np.array([m["residual"] for m in modes], dtype=float)
         g.create_dataset("mode_residual", data=res)
@@ -566,6 +606,45 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         _describe(f)
 
 
+def _write_flutter_modes(g, modes: list, n: int) -> None:
+    """``/flutter_modes``: one row per flutter mode, fastest first (layout in the module docstring)."""
+    def column(fn):
+        return np.array([fn(m) for m in modes], dtype=float)
+
+    g.create_dataset("sigma_real", data=column(lambda m: m["sigma"].real))
+    g.create_dataset("sigma_imag", data=column(lambda m: m["sigma"].imag))
+    g.create_dataset("growth_rate", data=column(lambda m: m["mode"].growth_rate))
+    g.create_dataset("frequency", data=column(lambda m: m["mode"].frequency))
+    g.create_dataset("residual", data=column(lambda m: m["mode"].residual))
+    g.create_dataset("radius", data=column(lambda m: m["mode"].radius))
+    g.create_dataset("branch", data=_strings([m["mode"].branch for m in modes], 64))
+    X = np.stack([m["x"] for m in modes]) if modes else np.zeros((0, n), dtype=complex)
+    kw = {"chunks": (1, n), "compression": "gzip", "compression_opts": 4} if modes and n > 4096 else {}
+    g.create_dataset("x_real", data=X.real, **kw)
+    g.create_dataset("x_imag", data=X.imag, **kw)
+    for k, m in enumerate(modes):
+        mg = g.create_group(f"mode_{k}")
+        mg.create_dataset("support", data=m["support"])
+        for name, sup in m["interface_support"].items():
+            mg.create_dataset(f"interface_support/{name}", data=sup)
+
+
+def _flutter_fields(model, modes: list) -> tuple[dict, dict, float]:
+    """The XDMF fields of the fastest flutter mode (real and imaginary parts, one display
+    scale for both), their attributes, and that scale."""
+    if not modes:
+        return {}, {}, 0.0
+    m = modes[0]
+    scale = plotting.display_scale(model, np.abs(m["x"]))
+    sigma = m["sigma"]
+    head = (f"fastest flutter mode (sigma = {sigma.real:.10g} {sigma.imag:+.6g}i, growth rate "
+            f"{m['mode'].growth_rate:.6g}) times its display scale {scale:.6g}")
+    fields = {"flutter_0_real": scale * m["x"].real, "flutter_0_imag": scale * m["x"].imag}
+    attrs = {"flutter_0_real": {"long_name": f"real part of the {head}"},
+             "flutter_0_imag": {"long_name": f"imaginary part (a quarter period later) of the {head}"}}
+    return fields, attrs, scale
+
+
 # --------------------------------------------------------------------------- the whole set
 
 def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: dict, ranks: int,
@@ -583,6 +662,9 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
     fields = {f"mode_{k}": scales[k] * m["x"] for k, m in enumerate(modes[:max_xdmf_modes])}
     described = {f"mode_{k}": {"long_name": f"shape of mode {k} (sigma = {m['sigma']:.10g}) times its display "
                                             f"scale {scales[k]:.6g}"} for k, m in enumerate(modes[:max_xdmf_modes])}
+    flutter_fields, flutter_attrs, flutter_scale = _flutter_fields(model, prep["flutter_modes"])
+    fields.update(flutter_fields)
+    described.update(flutter_attrs)
     fields["contact_state"] = prep["code"]
     if prep["static_u"] is not None:
         fields["static_u"] = prep["static_u"]
@@ -594,9 +676,21 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
 
     if plots:
         fastest = modes[0]["mode"] if modes else None
-        plotting.plot_mode(model, stage / FILES["mode_png"], fastest, stable=getattr(result, "stable", None),
+        # mode.png is about divergence: "stable" there means no divergence mode (flutter has its PNG)
+        divergence = getattr(result, "divergence", None)
+        no_divergence = getattr(result, "stable", None) if divergence is None else divergence is False
+        plotting.plot_mode(model, stage / FILES["mode_png"], fastest, stable=no_divergence,
                   n_modes=len(modes))
         written["mode_png"] = FILES["mode_png"]
+        if prep["flutter_modes"]:
+            m = prep["flutter_modes"][0]
+            shape = dataclasses.replace(m["mode"], x=m["x"].real)
+            plotting.plot_mode(model, stage / FILES["flutter_png"], shape, heading=(
+                f"fastest flutter mode, σ = {m['sigma'].real:.6g} {m['sigma'].imag:+.4g}i, growth rate "
+                f"{shape.growth_rate:.4g}, frequency {shape.frequency:.4g}; real part of the shape "
+                f"(the imaginary part, a quarter period later, is in lattice.xdmf)"),
+                n_modes=len(prep["flutter_modes"]))
+            written["flutter_png"] = FILES["flutter_png"]
         if prep["lines"]:
             per_line = _line_forces(prep, scene.nx)
             u = prep["static_u"]
@@ -693,7 +787,8 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
                                  overrides)
             # data first, the XDMF (which points at lattice.h5) after it, results.h5 last; a
             # signal waits for these renames, so the outputs are never half old, half new
-            order = [k for k in ("lattice", "xdmf", "mode_png", "contacts_png", "results") if k in written]
+            order = [k for k in ("lattice", "xdmf", "mode_png", "flutter_png", "contacts_png", "results")
+                     if k in written]
             with uninterrupted():
                 for key in order:
                     os.replace(stage / written[key], directory / written[key])

@@ -205,7 +205,7 @@ def _scene_name(model: LatticeModel, title):
 
 def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str | None = None,
               fraction: float = 0.15, n_modes: int | None = None, max_bonds: int = 60000,
-              dpi: int = 150) -> Path:
+              dpi: int = 150, heading: str | None = None) -> Path:
     """Draw a divergence mode on the deformed lattice to the PNG ``path``.
 
     ``mode``: anything with ``sigma``, ``growth_rate``, ``x`` (natural numbering, length
@@ -214,7 +214,8 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
     coloured by material, with ``s`` = :func:`display_scale` (largest displacement =
     ``fraction`` of the lattice height); the contact nodes whose slip is active in the mode
     are ringed.  Without a mode: the reference lattice, titled "stable" (``stable=True``) or
-    "no certified mode" otherwise.
+    "no certified mode" otherwise.  ``heading``: what the mode is, instead of "fastest
+    divergence mode, σ = ..." (a flutter mode's real part, for instance).
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
@@ -291,7 +292,7 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
             ax.scatter(cur[ring, 0], cur[ring, 1], s=90, facecolors="none", edgecolors="red",
                        linewidths=1.4, zorder=4)
             handles.append(Line2D([], [], ls="", marker="o", mfc="none", mec="red", ms=9,
-                                  label="active slip in this mode"))
+                                  label="sliding in this mode" if heading else "active slip in this mode"))
     ax.set_xlim(lo[0] - a, hi[0] + a)
     ax.set_ylim(min(lo[1], 0.0) - 1.0 * a, hi[1] + a)
     ax.set_aspect("equal")
@@ -299,8 +300,8 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
     ax.set_ylabel("y")
     name = _scene_name(model, title)
     if mode is not None:
-        sigma = float(mode.sigma)
-        head = f"{name}: fastest divergence mode, σ = {sigma:.6g}, growth rate λ = {mode.growth_rate:.6g}"
+        head = f"{name}: " + (heading or f"fastest divergence mode, σ = {float(mode.sigma):.6g}, "
+                                         f"growth rate λ = {mode.growth_rate:.6g}")
         sub = (f"deformed = reference + {scale:.3g}·x (largest displacement {100 * fraction:.0f}% "
                f"of the height)" if scale > 0 else "zero mode shape")
         if n_modes is not None and n_modes > 1:

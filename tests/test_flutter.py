@@ -1,0 +1,257 @@
+"""Flutter of steady sliding (docs/flutter.md): the verdict, the dense path against an
+independent QZ, the large-scale search forced on small scenes, the residual gate, symmetry,
+borderline pairs, grazing branches, hostile values of the new keyword and scene key."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+import meicp
+from meicp.contact import flutter as fl
+from meicp.contact.problem import pencil
+from meicp.contact.result import growth_frequency
+from meicp.core.errors import ProblemError
+from meicp.io.scene import scene_from_dict
+
+from .conftest import ROOT
+
+SCENES = ROOT / "data" / "scenes"
+
+
+def lattice(nx: int, rows: tuple[int, int], mu: float, states="slip+", *, shear: float = 0.0, solver=None):
+    """Two layers (k = 1 / 5, ρ = 1 / 2) on a rough base, top fixed, sides free."""
+    d = {"lattice": {"nx": nx, "spacing": 1.0, "shear": shear},
+         "layers": [{"name": "A", "rows": rows[0], "stiffness": 1.0, "density": 1.0},
+                    {"name": "B", "rows": rows[1], "stiffness": 5.0, "density": 2.0}],
+         "boundary": {"top": "fixed", "bottom": "contact"},
+         "contact": {"friction": mu, "states": states}}
+    if solver:
+        d["solver"] = solver
+    return scene_from_dict(d)
+
+
+def qz_fastest(scene):
+    """Growth rate and frequency of the fastest non-real σ of the sliding pencil, by
+    scipy.linalg.eig on (A, B) and numpy's complex square root (independent of meicp's
+    classification and of its cancellation-free formula)."""
+    with pencil(scene) as pen:
+        A, B = pen.A.toarray(), pen.B.toarray()
+    w = sl.eig(A, B, right=False)
+    w = w[np.isfinite(w) & (np.abs(w.imag) > 1e-8 * np.abs(w).max())]
+    lam = np.sqrt(w.astype(complex))
+    k = int(np.argmax(lam.real))
+    return lam[k].real, abs(lam[k].imag), len(w) // 2
+
+
+def rel(a, b):
+    return abs(a - b) / abs(b)
+
+
+@pytest.mark.parametrize("sigma", [-4.0 + 1e-9j, -1.75 + 0.12j, 2.0 + 3.0j, -1e-6 + 1e-12j, 1e-3 + 1e-8j])
+def test_growth_and_frequency_have_no_cancellation(sigma):
+    g, f = growth_frequency(sigma)
+    assert abs(complex(g, f) ** 2 - sigma) <= 4e-16 * abs(sigma) and g > 0 and f >= 0
+
+
+@pytest.mark.parametrize("scene", [lattice(20, (2, 2), 0.3), lattice(20, (2, 2), 3.0, shear=0.5),
+                                   lattice(12, (3, 3), 1.0, states="slip-")],
+                         ids=["mu0.3", "mu3-sheared", "slip-"])
+def test_fastest_flutter_mode_matches_qz(scene):
+    r = meicp.analyze(scene)
+    g, f, pairs = qz_fastest(scene)
+    assert r.flutter is True and "a proof" in r.flutter_evidence
+    m = r.flutter_modes[0]
+    assert rel(m.growth_rate, g) <= 1e-8 and rel(m.frequency, f) <= 1e-8
+    assert len(r.flutter_modes) == pairs
+    assert all(x.residual <= fl.RESIDUAL_TOL for x in r.flutter_modes)
+    growth = [x.growth_rate for x in r.flutter_modes]
+    assert growth == sorted(growth, reverse=True)
+    # the shape is in natural numbering, unit norm, zero on the fixed top row
+    assert m.x.shape == (scene.n_dofs,) and np.isclose(np.linalg.norm(m.x), 1.0)
+    assert np.all(m.x[-2 * scene.nx:] == 0) and m.x.dtype == complex
+    assert m.support.tolist() == list(range(scene.nx))
+
+
+def test_frictional_interface_uses_qz_and_matches():
+    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+    r = meicp.analyze(scene)
+    with pencil(scene) as pen:
+        A, B = pen.A.toarray(), pen.B.toarray()
+        assert not np.allclose(B, B.T)  # nonsymmetric B: QZ, not the scaled QR
+    if r.flutter is True:
+        g, f, _ = qz_fastest(scene)
+        assert "QZ" in r.flutter_evidence and rel(r.flutter_modes[0].growth_rate, g) <= 1e-8
+    else:
+        assert r.flutter is False and not r.flutter_modes
+
+
+def test_verdicts_compose_on_the_shipped_scene():
+    """two_layers.toml: μ = 3 diverges and flutters; μ = 1 only flutters (meicp said STABLE
+    there before issue 15); μ = 0.3 does neither (proved both ways)."""
+    scene = meicp.load_scene(SCENES / "two_layers.toml")
+
+    def at(mu):
+        return meicp.analyze(dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=mu)))
+
+    r3, r1, r03 = at(3.0), at(1.0), at(0.3)
+    assert (r3.divergence, r3.flutter, r3.stable, r3.verdict) == (True, True, False, "UNSTABLE")
+    assert (r1.divergence, r1.flutter, r1.stable) == (False, True, False)
+    assert (r03.divergence, r03.flutter, r03.stable, r03.verdict) == (False, False, True, "STABLE")
+    doc = r1.to_dict()
+    assert doc["divergence"] is False and doc["flutter"] is True and doc["flutter_modes"][0]["growth_rate"] > 0
+    assert "flutter: FLUTTER" in r1.summary() and "divergence: NO DIVERGENCE" in r1.summary()
+
+
+def test_frictionless_sliding_is_proved_flutter_free():
+    r = meicp.analyze(lattice(10, (2, 2), 0.0))
+    assert r.flutter is False and r.flutter_modes == [] and "symmetric" in r.flutter_evidence
+
+
+def test_flutter_false_leaves_it_undecided():
+    scene = lattice(10, (2, 2), 0.3)
+    for r in (meicp.analyze(scene, flutter=False),
+              meicp.analyze(dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, flutter=False)))):
+        assert r.flutter is None and r.flutter_modes == [] and "not analysed" in r.flutter_evidence
+        assert r.divergence is False and r.stable is None and r.verdict == "UNDECIDED"
+
+
+@pytest.mark.parametrize("value", ["yes", 1, None.__class__, 0.0])
+def test_hostile_flutter_keyword(value):
+    with pytest.raises(ProblemError, match="flutter must be True or False"):
+        meicp.analyze(lattice(4, (1, 1), 0.3), flutter=value)
+
+
+@pytest.mark.parametrize("value", ['"yes"', "1", "[true]"])
+def test_hostile_flutter_scene_key(tmp_path, value):
+    text = (SCENES / "two_layers.toml").read_text()
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace("[solver]", f"[solver]\nflutter = {value}") if "[solver]" in text
+                    else text + f"\n[solver]\nflutter = {value}\n")
+    with pytest.raises(ProblemError, match="flutter"):
+        meicp.load_scene(path)
+
+
+def _block_pencil(eps: float):
+    """One 2×2 block [[a, ε], [−ε, a]] (σ = a ± iε) among well separated real eigenvalues,
+    hidden by a random orthogonal similarity."""
+    rng = np.random.default_rng(0)
+    n = 40
+    T = np.diag(-np.linspace(1.0, 20.0, n))
+    T[0, 0] = T[1, 1] = -5.55
+    T[0, 1], T[1, 0] = eps, -eps
+    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    return Q @ T @ Q.T, np.eye(n)
+
+
+def test_clear_pair_is_flutter():
+    r = fl.dense_flutter(*_block_pencil(1e-3))
+    assert r.flutter is True and len(r.modes) == 1 and abs(r.modes[0][0] - (-5.55 + 1e-3j)) < 1e-12
+
+
+@pytest.mark.parametrize("eps", [1e-15, 1e-17, 0.0])
+def test_rounding_level_pair_is_undecided(eps):
+    r = fl.dense_flutter(*_block_pencil(eps))
+    assert r.flutter is None and r.counts["borderline"] >= 1 and not r.modes
+
+
+def test_real_nonsymmetric_spectrum_is_proved_flutter_free():
+    rng = np.random.default_rng(1)
+    n = 30
+    T = np.triu(rng.standard_normal((n, n)), 1) + np.diag(-np.linspace(1, 10, n))
+    S = rng.standard_normal((n, n)) + n * np.eye(n)
+    r = fl.dense_flutter(S @ T @ np.linalg.inv(S), np.eye(n))
+    assert r.flutter is False and r.counts["certified_real"] == n and "a proof" in r.evidence
+
+
+def test_a_mode_failing_the_residual_gate_is_not_reported():
+    with pencil(lattice(20, (2, 2), 3.0)) as pen:
+        r = fl.dense_flutter(pen.A, pen.B, residual_tol=1e-30)
+    assert not r.modes and r.rejected and r.flutter is None and "residual gate" in r.evidence
+
+
+def test_grazing_branches_bracket_the_contact():
+    states = ["slip+"] * 8
+    states[3] = "grazing"
+    scene = lattice(8, (2, 2), 1.0, states=states)
+    with pencil(scene, grazing_case=((0, 3, "slip+"),)) as pen:
+        branches = fl.grazing_branches(pen.sets)
+    assert [label for label, _ in branches] == ["separated", "sliding base:slip+"]
+    assert branches[0][1][0].states[3] == "separated" and branches[1][1][0].states[3] == "slip+"
+    assert fl.combine_branches([True, None]) is None and fl.combine_branches([False, False]) is False
+    assert fl.combine_branches([True, True]) is True
+    r = meicp.analyze(scene)
+    assert "separated" in r.flutter_evidence and "sliding" in r.flutter_evidence
+    if r.flutter:
+        assert {m.branch for m in r.flutter_modes} == {"separated", "sliding base:slip+"}
+
+
+def _forced_search(comm):
+    """The large-scale path on a 928-DOF pencil, against dense QZ of the same pencil."""
+    scene = lattice(32, (8, 8), 2.0)
+    with pencil(scene, comm=comm) as pen:
+        got = fl.pencil_flutter(pen, scene, comm, dense_max=0)
+        ref = fl.pencil_flutter(pen, scene, comm)
+    return got, ref
+
+
+def test_large_scale_search_forced_on_a_small_scene():
+    got, ref = _forced_search(None)
+    assert ref.flutter is True and ref.complete
+    assert got.flutter is True and not got.complete and "not a proof" in got.evidence
+    (s, x, res, *_), (s_ref, x_ref, *_) = got.modes[0], ref.modes[0]
+    g, f = growth_frequency(s)
+    g_ref, f_ref = growth_frequency(s_ref)
+    assert rel(g, g_ref) <= 1e-8 and rel(f, f_ref) <= 1e-8 and res <= fl.RESIDUAL_TOL
+    assert abs(abs(np.vdot(x, x_ref)) - 1) < 1e-6
+    # every mode the search certified is one of QZ's
+    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+
+
+def test_search_without_a_mode_never_says_no_flutter():
+    with pencil(lattice(20, (2, 2), 3.0)) as pen:
+        r = fl.search_flutter(pen.A, pen.B, [-30.0 + 1e-3j], nev=1, ncv=8, residual_tol=1e-30)
+    assert r.flutter is None and not r.modes and "not a proof" in r.evidence
+
+
+@pytest.mark.mpi(min_size=2)
+def test_same_flutter_modes_on_two_ranks(comm):
+    from mpi4py import MPI
+
+    scene = lattice(16, (3, 3), 2.0)
+    one, two = meicp.analyze(scene), meicp.analyze(scene, comm=comm)
+    assert one.flutter is two.flutter is True and len(one.flutter_modes) == len(two.flutter_modes)
+    for a, b in zip(one.flutter_modes, two.flutter_modes):
+        assert abs(a.sigma - b.sigma) <= 1e-12 * abs(a.sigma) and abs(abs(np.vdot(a.x, b.x)) - 1) < 1e-8
+    got, ref = _forced_search(comm)
+    serial, _ = _forced_search(MPI.COMM_SELF)
+    assert abs(got.modes[0][0] - serial.modes[0][0]) <= 1e-10 * abs(serial.modes[0][0])
+    assert rel(growth_frequency(got.modes[0][0])[0], growth_frequency(ref.modes[0][0])[0]) <= 1e-8
+
+
+def test_solve_writes_and_prints_flutter(cli, tmp_path):
+    import json
+
+    import h5py
+
+    out = tmp_path / "run"
+    code, text, err = cli("solve", SCENES / "two_layers.toml", "-o", out, "--json", "-q")
+    doc = json.loads(text)
+    assert code == 0 and doc["divergence"] is True and doc["flutter"] is True and doc["stable"] is False
+    fastest = doc["flutter_modes"][0]
+    assert fastest["growth_rate"] > 0 and fastest["sigma_imag"] > 0 and fastest["residual"] <= 1e-10
+    assert (out / "flutter_mode.png").is_file() and doc["output"]["flutter_png"].endswith("flutter_mode.png")
+    with h5py.File(out / "results.h5") as f:
+        assert f.attrs["flutter"] == 1 and f.attrs["divergence"] == 1 and f.attrs["n_flutter_modes"] == 3
+        g = f["flutter_modes"]
+        assert np.isclose(g["growth_rate"][0], fastest["growth_rate"], rtol=1e-12)
+        assert g["x_real"].shape == g["x_imag"].shape == (3, 40) and g["sigma_imag"].attrs["units"] == "1"
+        assert "long_name" in g["frequency"].attrs
+    assert "flutter_0_imag" in (out / "lattice.xdmf").read_text()
+    code, text, _ = cli("solve", SCENES / "two_layers.toml", "--no-output", "--no-flutter", "-q")
+    assert code == 0 and re.search(r"^flutter +FLUTTER UNDECIDED$", text, re.M)
+    assert re.search(r"^divergence +DIVERGENCE$", text, re.M) and "not analysed" in text
