@@ -255,3 +255,11 @@ def test_solve_writes_and_prints_flutter(cli, tmp_path):
     code, text, _ = cli("solve", SCENES / "two_layers.toml", "--no-output", "--no-flutter", "-q")
     assert code == 0 and re.search(r"^flutter +FLUTTER UNDECIDED$", text, re.M)
     assert re.search(r"^divergence +DIVERGENCE$", text, re.M) and "not analysed" in text
+
+
+def test_search_that_would_not_fit_in_memory_is_skipped_and_says_so(monkeypatch):
+    monkeypatch.setattr(fl, "available_memory_on", lambda comm: (1000, "this machine"))
+    scene = lattice(20, (2, 2), 3.0)
+    with pencil(scene) as pen:
+        r = fl.pencil_flutter(pen, scene, dense_max=0)
+    assert r.flutter is None and not r.modes and r.evidence.startswith("not searched")
