@@ -99,5 +99,18 @@ if wanted resolution; then begin resolution
     else run "$PY" scripts/bench_resolution.py; fi
     chart resolution; end resolution; fi
 
+# === flutter: accuracy against dense QZ, cost against one eigen-solve, stability map (issue 15) ===
+if wanted flutter; then begin flutter
+    if [[ $mode == quick ]]; then
+        run "$PY" scripts/bench_flutter.py accuracy --dofs 300 1000
+        run "${MPI[@]}" "$PY" scripts/bench_flutter.py cost --dofs 10000 --repeats 1 --check
+    else
+        run "$PY" scripts/bench_flutter.py accuracy
+        run "${MPI[@]}" "$PY" scripts/bench_flutter.py cost --dofs 100000 300000 --repeats 3 --check
+    fi
+    run "$PY" scripts/bench_flutter.py chart
+    run "$PY" scripts/stability_map.py
+    end flutter; fi
+
 echo; echo "=== bench $mode: done in $((SECONDS - start_all)) s; results in $DIR ==="
 printf '%s\n' "${SUMMARY[@]}"

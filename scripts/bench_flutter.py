@@ -1,8 +1,9 @@
 """Flutter of steady sliding (issue 15, docs/flutter.md): accuracy against dense QZ, and cost
 at scale against one SLEPc eigen-solve of the same pencil, with an independent check.
 
-    .venv/bin/python scripts/bench_flutter.py accuracy [--dofs 300 1000 2000 5000]
+    .venv/bin/python scripts/bench_flutter.py accuracy [--dofs 300 1000 2000 3000 5000]
     mpirun -n 2 .venv/bin/python scripts/bench_flutter.py cost [--dofs 100000] [--repeats 3] [--check]
+    .venv/bin/python scripts/bench_flutter.py chart     # flutter_accuracy.png, flutter_cost.png
 
 Scenes: ``bench_scenes.two_layer_scene`` (nx = 2ny, soft k = 1 under stiff k = 5, top fixed,
 sides free, every base node slip+), μ = 2.
@@ -156,15 +157,64 @@ def cost(sizes, repeats: int, check: bool) -> None:
             print(r)
 
 
+def chart() -> None:
+    """flutter_accuracy.png (relative errors and seconds against DOFs, per path) and
+    flutter_cost.png (median seconds of the eigen-solve and the search per size)."""
+    import csv
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = csv_path("flutter_accuracy")
+    if path.exists():
+        rows = list(csv.DictReader(path.open()))
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
+        for k, label in enumerate(sorted({r["path"] for r in rows})):
+            pts = sorted((int(r["dofs"]), float(r["growth_rel_err"]), float(r["frequency_rel_err"]), float(r["seconds"]))
+                         for r in rows if r["path"] == label)
+            x = [p[0] for p in pts]
+            ax.semilogy(x, [max(p[1], 1e-17) for p in pts], "o-", color=f"C{k}", label=f"{label}: growth rate")
+            ax.semilogy(x, [max(p[2], 1e-17) for p in pts], "s--", color=f"C{k}", label=f"{label}: frequency")
+            bx.semilogy(x, [p[3] for p in pts], "o-", color=f"C{k}", label=label)
+        qz = sorted({(int(r["dofs"]), float(r["seconds_qz"])) for r in rows})
+        bx.semilogy([q[0] for q in qz], [q[1] for q in qz], "k:", label="reference: LAPACK eigenvalues only")
+        ax.axhline(1e-8, color="r", lw=0.8, label="target 1e-8")
+        ax.set(xlabel="DOFs", ylabel="relative error against LAPACK", title="fastest flutter mode vs dense QZ")
+        bx.set(xlabel="DOFs", ylabel="seconds (1 core)", title="cost of each path")
+        ax.legend(fontsize=7)
+        bx.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(path.with_suffix(".png"), dpi=120)
+    path = csv_path("flutter_cost")
+    if path.exists():
+        rows = sorted(csv.DictReader(path.open()), key=lambda r: int(r["dofs"]))
+        fig, ax = plt.subplots(figsize=(7, 4.2))
+        x = np.arange(len(rows))
+        ax.bar(x - 0.2, [float(r["baseline_median_s"]) for r in rows], 0.4, label="one SLEPc eigen-solve (nev 4)")
+        ax.bar(x + 0.2, [float(r["search_median_s"]) for r in rows], 0.4, label="flutter search")
+        for i, r in enumerate(rows):
+            ax.annotate(f"{float(r['ratio_of_medians']):.2f}×", (i + 0.2, float(r["search_median_s"])),
+                        ha="center", va="bottom", fontsize=8)
+        ax.set_xticks(x, [f"{int(r['dofs']):,} DOFs\n{r['ranks']} ranks" for r in rows])
+        ax.set(ylabel="median seconds", title="flutter search against one eigen-solve of the same pencil")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(path.with_suffix(".png"), dpi=120)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=("accuracy", "cost"))
+    ap.add_argument("what", choices=("accuracy", "cost", "chart"))
     ap.add_argument("--dofs", type=int, nargs="+")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--check", action="store_true", help="the independent λ-line sweep (cost)")
     args = ap.parse_args()
-    if args.what == "accuracy":
-        accuracy(args.dofs or [300, 1000, 2000, 5000])
+    if args.what == "chart":
+        chart()
+    elif args.what == "accuracy":
+        accuracy(args.dofs or [300, 1000, 2000, 3000, 5000])
     else:
         cost(args.dofs or [100_000], args.repeats, args.check)
 

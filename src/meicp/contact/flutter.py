@@ -62,8 +62,9 @@ MARGIN = 1e6
 SEARCH_TARGETS = 3
 SEARCH_NEV = 4
 SEARCH_NCV = 16
-#: at and above this many retained DOFs one target with nev 2, ncv 12 (cost ≈ 3 eigen-solves)
-SEARCH_LARGE = 100_000
+#: at and above this many retained DOFs one target with nev 2, ncv 12, SLEPc tol 1e-10 (the
+#: residual gate stays 1e-10): about 3 eigen-solves of the pencil (docs/benchmarks.md, Flutter)
+SEARCH_LARGE = 50_000
 #: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
 #: next to the contact for it to count as contact-localised
 PROXY_NX = 32
@@ -385,6 +386,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
     if n >= SEARCH_LARGE:
         search.setdefault("nev", 2)
         search.setdefault("ncv", 12)
+        search.setdefault("tol", 1e-10)
     return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
 
 
