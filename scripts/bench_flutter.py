@@ -20,7 +20,7 @@ the pencil — shift-and-invert at 0, 4 eigenpairs, GNHEP, MUMPS LU with AMF, to
 (``bench_common.slepc_eigensolve``: what the active-set search does per step) — and (b) the
 flutter search ``analyze`` runs at that size; medians, paired ratios, peak memory.
 ``--check``: once, the second, independent strategy — a λ-line sweep of complex targets
-σ = (1.25·g + iω)², ω ∈ [0.3, 3] (no proxy) — and the ratio of the two fastest growth rates.
+σ = (1.25·g + iω)², ``--check-targets`` values of ω ∈ [0.3, 3] (no proxy) — and the ratio of the two fastest growth rates.
 → ``flutter_cost.csv``.  Runs at 10⁶ DOFs go under ``flock /work/scratch/bench.lock``.
 """
 
@@ -94,7 +94,7 @@ def accuracy(sizes) -> None:
                keep=lambda r: int(r["dofs"]) not in {int(x["dofs"]) for x in rows})
 
 
-def cost(sizes, repeats: int, check: bool) -> None:
+def cost(sizes, repeats: int, check: bool, check_targets: int = 6) -> None:
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
@@ -131,7 +131,7 @@ def cost(sizes, repeats: int, check: bool) -> None:
             if check:
                 g = row["growth"] or 0.1
                 t0 = time.perf_counter()
-                sweep = fl.search_flutter(pen.A, pen.B, fl.lambda_line_targets(1.25 * g, np.linspace(0.3, 3.0, 6)),
+                sweep = fl.search_flutter(pen.A, pen.B, fl.lambda_line_targets(1.25 * g, np.linspace(0.3, 3.0, check_targets)),
                                           comm, nev=4, ncv=16, options={"eps_max_it": 10})
                 row["check_seconds"] = f"{time.perf_counter() - t0:.1f}"
                 if sweep.modes:
@@ -210,13 +210,14 @@ def main() -> None:
     ap.add_argument("--dofs", type=int, nargs="+")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--check", action="store_true", help="the independent λ-line sweep (cost)")
+    ap.add_argument("--check-targets", type=int, default=6, help="targets of the sweep (default 6)")
     args = ap.parse_args()
     if args.what == "chart":
         chart()
     elif args.what == "accuracy":
         accuracy(args.dofs or [300, 1000, 2000, 3000, 5000])
     else:
-        cost(args.dofs or [100_000], args.repeats, args.check)
+        cost(args.dofs or [100_000], args.repeats, args.check, args.check_targets)
 
 
 if __name__ == "__main__":

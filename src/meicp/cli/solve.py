@@ -241,7 +241,7 @@ def _run(args, comm, t0) -> int:
         wall["write"] = time.perf_counter() - t2
         log.info(f"writing: done in {seconds(wall['write'])}")
         rows.append(("outputs", f"{out}/  (open {files['xdmf'].name} in ParaView)"))
-        rows += [("", f"  {path.name:<14} {_DESCRIBE.get(key, '')}") for key, path in files.items()]
+        rows += [("", f"  {path.name:<16} {_DESCRIBE.get(key, '')}") for key, path in files.items()]
     wall["total"] = time.perf_counter() - t0
     rows.append(("wall", ", ".join(f"{k} {seconds(v)}" for k, v in wall.items())))
     if args.json:
@@ -259,5 +259,5 @@ _DESCRIBE = {"results": "scene, versions, states, forces, modes, certificates, t
              "lattice": "lattice + mode shapes + contact states (HDF5)",
              "xdmf": "ParaView/meshio entry point for lattice.h5",
              "mode_png": "fastest mode on the deformed lattice",
-             "flutter_png": "fastest flutter mode (real and imaginary parts of its shape)",
+             "flutter_png": "fastest flutter mode (real part of its complex shape; both parts in the XDMF)",
              "contacts_png": "contact states and forces along each contact line"}

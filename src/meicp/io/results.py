@@ -686,9 +686,8 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
             m = prep["flutter_modes"][0]
             shape = dataclasses.replace(m["mode"], x=m["x"].real)
             plotting.plot_mode(model, stage / FILES["flutter_png"], shape, heading=(
-                f"fastest flutter mode, σ = {m['sigma'].real:.6g} {m['sigma'].imag:+.4g}i, growth rate "
-                f"{shape.growth_rate:.4g}, frequency {shape.frequency:.4g}; real part of the shape "
-                f"(the imaginary part, a quarter period later, is in lattice.xdmf)"),
+                f"fastest flutter mode (real part of x), σ = {m['sigma'].real:.6g} {m['sigma'].imag:+.4g}i, "
+                f"growth rate {shape.growth_rate:.4g}, frequency {shape.frequency:.4g}"),
                 n_modes=len(prep["flutter_modes"]))
             written["flutter_png"] = FILES["flutter_png"]
         if prep["lines"]:
