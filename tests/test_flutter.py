@@ -18,7 +18,7 @@ from meicp.contact.result import growth_frequency
 from meicp.core.errors import ProblemError
 from meicp.io.scene import scene_from_dict
 
-from .conftest import ROOT
+from .conftest import ROOT, meicp_cmd, run
 
 SCENES = ROOT / "data" / "scenes"
 
@@ -263,3 +263,18 @@ def test_search_that_would_not_fit_in_memory_is_skipped_and_says_so(monkeypatch)
     with pencil(scene) as pen:
         r = fl.pencil_flutter(pen, scene, dense_max=0)
     assert r.flutter is None and not r.modes and r.evidence.startswith("not searched")
+
+
+def test_no_flutter_flag_takes_no_value():
+    out = run(meicp_cmd() + ["solve", str(SCENES / "two_layers.toml"), "--no-output", "--no-flutter=yes"])
+    assert out.returncode == 2 and "--no-flutter" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_search_without_a_proxy_on_a_frictional_interface():
+    """B not diagonal, no strip proxy: λ-line targets; what it certifies is QZ's."""
+    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+    with pencil(scene) as pen:
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+        ref = fl.pencil_flutter(pen, scene)
+    assert "λ-line" in got.evidence and got.flutter in (True, None) and ref.flutter is True
+    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
