@@ -47,6 +47,8 @@ LU = "meicp_lu_"
 EICP_VI = "meicp_eicp_vi_"
 #: ``meicp info --check``'s distributed eigen-solve
 SELFCHECK = "meicp_selfcheck_"
+#: MUMPS factorisations of the condensation onto the contact DOFs (Schur complements, solves)
+SCHUR = "meicp_schur_"
 
 #: prefix → what reads options under it (``meicp --help`` lists these)
 PREFIXES = {
@@ -59,6 +61,7 @@ PREFIXES = {
     LU: "MUMPS LU solves (KSP/PC)",
     EICP_VI: "SNES VI of the semismooth EiCP method",
     SELFCHECK: "SLEPc EPS of meicp info --check",
+    SCHUR: "MUMPS Schur complements and solves condensing a pencil onto its contact DOFs",
 }
 #: options PETSc reads only in PetscFinalize, after the end-of-run report
 _READ_AT_FINALIZE = {"options_left", "options_view", "malloc_dump", "malloc_view", "memory_view",
