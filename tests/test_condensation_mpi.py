@@ -47,3 +47,13 @@ def test_proofs_agree_with_serial(method):
         assert par.proved is ser.proved is proved
         assert par.test == ser.test and par.window == ser.window
         assert par.margin == pytest.approx(ser.margin, rel=1e-6, abs=1e-9)
+
+
+def test_critical_friction_bracket_on_two_ranks_matches_serial():
+    from meicp.contact.critical_friction import critical_friction
+
+    scene = two_layer_scene(30, (2, 2), mu=1.0, states="slip-", shear=0.5)
+    par = critical_friction(scene, comm=MPI.COMM_WORLD)
+    ser = critical_friction(scene)
+    assert par.exact and ser.exact
+    assert float(par) == pytest.approx(float(ser), rel=1e-9) and par.lower == pytest.approx(ser.lower, rel=1e-6)

@@ -39,15 +39,17 @@ SCHUR_ERROR_FLOOR = 1e-13
 
 
 class Condenser:
-    """``Condenser(comm, model, maps, friction=...)``: the split pencil (``pieces``) and
+    """``Condenser(comm, model, maps, friction=...)`` (K, M: the lattice's SciPy matrices if
+    already assembled): the split pencil (``pieces``) and
     :meth:`at` (σ) → :class:`~.condensation.Condensed`.  After :meth:`prepare`, ``ready`` says
     whether the condensation is certified usable and ``why`` says why not; ``tau`` is the
     certified λ_min bound (None for the Schur method without windows).  Collective."""
 
-    def __init__(self, comm, model, maps, *, friction: str = "scene", method: str = "auto"):
+    def __init__(self, comm, model, maps, *, friction: str = "scene", method: str = "auto", K=None, M=None):
         if method not in ("auto", "schur", "solves"):
             raise ValueError(f"method must be 'auto', 'schur' or 'solves', got {method!r}")
-        K, M = assemble_scipy(model)
+        if K is None or M is None:
+            K, M = assemble_scipy(model)
         self.comm = comm
         self.pieces: PencilPieces = pieces_of(K, M, maps, friction=friction)
         F, J = self.pieces.F, self.pieces.J

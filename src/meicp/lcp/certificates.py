@@ -35,6 +35,8 @@ EPS = np.finfo(float).eps
 #: allowance for LAPACK's symmetric eigenvalues: |λ̂ − λ| ≤ p(n)·u·‖X‖₂ with p modest; we
 #: charge ``EIG_ROUNDING·n·u·‖X‖₂`` (generous)
 EIG_ROUNDING = 10.0
+#: relative steps below a computed μ̄ at which a segment's far end is certified
+SHRINKS = tuple(m * 10.0 ** e for e in range(-7, 0) for m in (1, 2, 5)) + (0.5,)
 #: orders above which μ̄ uses Lanczos on a Cholesky factor instead of a dense eigen-solve
 DENSE_LIMIT = 300
 
@@ -222,16 +224,17 @@ def optimise_mu_scaling(S: np.ndarray, R: np.ndarray, iters: int = 150, keep: fl
 
 def certified_mu_lower_bound(S, R, error_S: float, error_R: float, d: np.ndarray | None,
                              mu_guess: float, *, tol: float = 0.0):
-    """The largest μ ≤ ``mu_guess`` (shrunk by 10⁻⁶, 10⁻⁵, … relative) for which both ends
-    sym(DS) and sym(D(S + μR)) pass :func:`pd_certificate` with their margins: every μ in
-    [0, μ] is then certified.  Returns ``(μ_lo, cert_0, cert_μ)``; μ_lo = 0 if none passes."""
+    """The largest μ ≤ ``mu_guess`` (shrunk by 10⁻⁷, 2·10⁻⁷, 5·10⁻⁷, 10⁻⁶, … relative) for
+    which both ends sym(DS) and sym(D(S + μR)) pass :func:`pd_certificate` with their
+    margins: every μ in [0, μ] is then certified.  Returns ``(μ_lo, cert_0, cert_μ)``; μ_lo = 0
+    if none passes."""
     c0 = pd_certificate(S, error_S, d, tol=tol)
     if not c0.proved:
         return 0.0, c0, c0
     if not np.isfinite(mu_guess):
         mu_guess = 1e6
     c1 = c0
-    for shrink in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.1, 0.5):
+    for shrink in SHRINKS:
         mu = mu_guess * (1 - shrink)
         c1 = pd_certificate(S + mu * R, error_S + mu * error_R, d, tol=tol)
         if c1.proved:
