@@ -54,3 +54,19 @@ def test_a_wide_lattice_gets_a_narrow_bracket():
 def test_a_stable_direction_is_proved_free_of_modes_at_every_mu():
     mu = critical_friction(two_layer_scene(40, (4, 4), mu=1.0, states="slip+", shear=0.5))
     assert mu == np.inf and mu.lower == np.inf and mu.exact and "∞" in mu.evidence
+
+
+def test_cli_prints_the_bracket_and_results_h5_stores_it(cli, tmp_path):
+    import h5py
+
+    scenes = Path(__file__).resolve().parents[1] / "data" / "scenes"
+    text = (scenes / "two_layers.toml").read_text().replace("nx = 5", "nx = 30")
+    path = tmp_path / "wide.toml"
+    path.write_text(text)
+    code, out, err = cli("solve", path, "--critical-friction", "-o", tmp_path / "o", "-q")
+    assert code == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("μ_c"))
+    assert "exact" in line and "proved ≥" in line and "|J| = 30: lower end" in out
+    with h5py.File(tmp_path / "o" / "results.h5") as f:
+        g = f["critical_friction"].attrs
+        assert g["lower"] <= g["value"] == g["upper"] and bool(g["exact"]) and "upper end" in g["evidence"]

@@ -76,9 +76,12 @@ class CriticalFriction(float):
         return (self.upper - self.lower) / self.upper if np.isfinite(self.upper) else np.inf
 
     def describe(self) -> str:
-        """One line: ``1.4605 (exact)``, ``in [1.08, 1.4605]`` or ``> 2.3 (no mode found)``."""
+        """One line: ``1.4605 (exact)``, ``in [1.08, 1.4605] (width …)`` or ``≥ 2.3 (no σ = 0 mode
+        found …)``."""
         if self.exact and np.isfinite(self.upper):
-            return f"{self.upper:.10g} (exact)"
+            if self.lower == self.upper:
+                return f"{self.upper:.10g} (exact)"
+            return f"{self.upper:.10g} (exact within {self.width:.1e}: proved ≥ {self.lower:.10g})"
         if self.exact:
             return f"none up to μ = {self.lower:.6g} (proved)"
         if not np.isfinite(self.upper):
