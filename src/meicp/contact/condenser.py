@@ -19,6 +19,7 @@ Collective on ``comm`` (every rank holds the SciPy pieces; MUMPS factors them di
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,14 +61,29 @@ class Condenser:
         self.relative_error: float | None = None
         self.ready, self.why = False, "not prepared"
         self.seconds: dict = {}
+        self._schur0: Condensed | None = None
+        self._factor0: MumpsFactor | None = None
+
+    def __enter__(self) -> "Condenser":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+    def destroy(self) -> None:
+        """Free the kept MUMPS factor of K̃_FF (collective)."""
+        if self._factor0 is not None:
+            self._factor0.destroy()
+            self._factor0 = None
 
     def _diagonal_FF(self) -> bool:
         MFF = self.pieces.Mt[self.pieces.F][:, self.pieces.F]
         return (MFF - sp.diags(MFF.diagonal())).count_nonzero() == 0
 
-    def prepare(self, *, need_tau: bool) -> bool:
+    def prepare(self, *, need_tau: bool, keep_factor: bool = False) -> bool:
         """Prove K̃_FF ≻ 0 (and τ when ``need_tau`` or the solves method need it) and, for the
-        Schur method, measure its error.  Returns ``ready``."""
+        Schur method, measure its error (keeping G(0) and, with ``keep_factor``, the factor of
+        K̃_FF for :meth:`factor_FF`).  Returns ``ready``."""
         t = time.perf_counter()
         F = self.pieces.F
         KFF = self.pieces.Kt[F][:, F].tocsr()
@@ -82,7 +98,15 @@ class Condenser:
         self.seconds["held"] = time.perf_counter() - t
         if self.ready and self.method == "schur":
             t = time.perf_counter()
-            self.relative_error = schur_error(self.comm, self.pieces)
+            factor = MumpsFactor(self.comm, KFF, symmetric=True)
+            try:
+                self.relative_error, X = schur_error(self.comm, self.pieces, factor.solve)
+            finally:
+                if keep_factor:
+                    self._factor0 = factor
+                else:
+                    factor.destroy()
+            self._schur0 = from_bordered_schur(self.pieces, 0.0, X, self.relative_error)
             self.seconds["probe"] = time.perf_counter() - t
         return self.ready
 
@@ -90,6 +114,8 @@ class Condenser:
         """G(σ) = S + R (and the Ξ blocks) with its error.  Collective."""
         if self.method == "solves":
             return condense(self.pieces, sigma, mumps_factor(self.comm), tau=self.tau, xi=xi)
+        if sigma == 0 and self._schur0 is not None:
+            return self._schur0
         H, rows = self.pieces.bordered(sigma)
         return from_bordered_schur(self.pieces, sigma, dense_schur(self.comm, H, rows, symmetric=True),
                                    self.relative_error)
@@ -100,8 +126,11 @@ class Condenser:
         return (f"condensation by MUMPS' Schur complement, error measured ({self.relative_error:.1e} relative, "
                 "charged; a measurement, not a bound)")
 
-    def factor_FF(self, sigma: float = 0.0) -> MumpsFactor:
-        """A MUMPS factor of H_FF(σ) (a context manager giving the solve), e.g. to lift x_J."""
+    def factor_FF(self, sigma: float = 0.0):
+        """A MUMPS factor of H_FF(σ) as a context manager giving the solve, e.g. to lift x_J
+        (the kept factor of K̃_FF at σ = 0, left open for :meth:`destroy`)."""
+        if sigma == 0 and self._factor0 is not None:
+            return nullcontext(self._factor0.solve)
         F = self.pieces.F
         return MumpsFactor(self.comm, (sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F], symmetric=True)
 
@@ -139,18 +168,19 @@ def certified_tau(comm, KFF, MFF) -> tuple[float | None, str]:
     return tau, ""
 
 
-def schur_error(comm, pieces: PencilPieces) -> float:
-    """The relative error of MUMPS' Schur complement of the σ = 0 bordered matrix, measured
-    along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from a
-    separate MUMPS factor of K̃_FF; charged ×PROBE_SAFETY, at least SCHUR_ERROR_FLOOR."""
+def schur_error(comm, pieces: PencilPieces, solve_KFF) -> tuple[float, np.ndarray]:
+    """MUMPS' Schur complement X of the σ = 0 bordered matrix and its relative error, measured
+    along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from
+    ``solve_KFF`` (a separate factor of K̃_FF); charged ×PROBE_SAFETY, at least
+    SCHUR_ERROR_FLOOR.  Returns ``(relative error, X)``."""
     H, rows = pieces.bordered(0.0)
-    G = from_bordered_schur(pieces, 0.0, dense_schur(comm, H, rows, symmetric=True), 0.0).G()
+    X = dense_schur(comm, H, rows, symmetric=True)
+    G = from_bordered_schur(pieces, 0.0, X, 0.0).G()
     J, F = pieces.J, pieces.F
     rng = np.random.default_rng(14)
     V = np.column_stack([np.ones(J.size), rng.standard_normal((J.size, 2))])
     H0 = pieces.H(0.0).tocsr()
-    with MumpsFactor(comm, pieces.Kt[F][:, F], symmetric=True) as solve:
-        XF = solve(H0[F][:, J] @ V)
+    XF = solve_KFF(H0[F][:, J] @ V)
     GV = H0[J][:, J] @ V - H0[J][:, F] @ XF
     rel = np.linalg.norm(G @ V - GV, axis=0) / (np.linalg.norm(V, axis=0) * max(np.abs(G).max(), 1e-300))
-    return float(max(PROBE_SAFETY * rel.max(), SCHUR_ERROR_FLOOR))
+    return float(max(PROBE_SAFETY * rel.max(), SCHUR_ERROR_FLOOR)), X

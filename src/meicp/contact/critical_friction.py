@@ -46,6 +46,8 @@ CRITICAL_COND = 1e12
 EXACT_WIDTH = 1e-5
 #: certificate residual of a σ = 0 mode lifted to the whole reduced lattice
 MODE_TOL = 1e-9
+#: condensed candidates lifted (one solve each) before the upper end is given up
+MAX_LIFTS = 20
 
 
 class CriticalFriction(float):
@@ -146,7 +148,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
             ends.append((mu, mu))
         else:
             enumerated = False
-            lo, up, text = _bracket(comm, model, red, K, M, A1, B1, mu_max, tol)
+            lo, up, text = _bracket(comm, model, red, K, M, A1, B1, mu_max)
             ends.append((lo, up))
             evidence.append(text)
     lower = min((lo for lo, _ in ends), default=np.inf)
@@ -173,10 +175,20 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
 
 
-def _bracket(comm, model, red, K, M, A1, B1, mu_max: float, tol: float) -> tuple[float, float, str]:
+def _bracket(comm, model, red, K, M, A1, B1, mu_max: float) -> tuple[float, float, str]:
     """``(lower, upper, evidence)`` of one grazing case with |J| > CRITICAL_J (collective)."""
-    cond = Condenser(comm, model, red, friction="unit", K=K, M=M)
-    if not cond.prepare(need_tau=False):
+    with Condenser(comm, model, red, friction="unit", K=K, M=M) as cond:
+        low, upper, mode_text = _ends(comm, cond, red, A1, B1, mu_max)
+        error_text = cond.error_text()
+    lower = min(low.mu, upper)
+    text = f"|J| = {red.J.size}: lower end {low.evidence}; upper end {mode_text}; {error_text}"
+    return lower, upper, text
+
+
+def _ends(comm, cond, red, A1, B1, mu_max: float):
+    """The proved lower end (a :class:`~.mu_bracket.LowerEnd`), the certified upper end and
+    its sentence (collective; the dense work on rank 0)."""
+    if not cond.prepare(need_tau=False, keep_factor=True):
         raise ProblemError(_singular_message(cond.why))
     c0 = cond.at(0.0, xi=False)
     S, R, eS, eR = c0.S, c0.R, c0.error_S, c0.error_R
@@ -192,7 +204,7 @@ def _bracket(comm, model, red, K, M, A1, B1, mu_max: float, tol: float) -> tuple
     mode_text = f"no σ = 0 mode found up to μ = {mu_max:g} ({len(candidates)} condensed candidates)"
     problem = EiCPProblem.from_data(A1, B1, red.J)
     with cond.factor_FF(0.0) as solve:
-        for mu, xJ in candidates:
+        for mu, xJ in candidates[:MAX_LIFTS]:
             if mu >= upper:
                 break
             sol = certify_pair(problem, mu, lift(cond.pieces, 0.0, xJ, solve))
@@ -209,9 +221,7 @@ def _bracket(comm, model, red, K, M, A1, B1, mu_max: float, tol: float) -> tuple
         low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max))
     if comm is not None and comm.Get_size() > 1:
         low = comm.bcast(low if rank == 0 else None, root=0)
-    lower = min(low.mu, upper)
-    text = f"|J| = {red.J.size}: lower end {low.evidence}; upper end {mode_text}; {cond.error_text()}"
-    return lower, upper, text
+    return low, upper, mode_text
 
 
 def friction_pencils(scene):
