@@ -70,3 +70,22 @@ def test_cli_prints_the_bracket_and_results_h5_stores_it(cli, tmp_path):
     with h5py.File(tmp_path / "o" / "results.h5") as f:
         g = f["critical_friction"].attrs
         assert g["lower"] <= g["value"] == g["upper"] and bool(g["exact"]) and "upper end" in g["evidence"]
+
+
+def test_the_lower_end_is_at_least_the_uncondensed_bound():
+    """μ_lo = 1/λ_max(−sym(P̃₁KQ̃), Q̃ᵀKQ̃) of the issue; the condensed proof is never weaker."""
+    import scipy.linalg as sl
+
+    from meicp.contact.condensation import pieces_of
+    from meicp.contact.maps import contact_sets, reduced_system
+    from meicp.lattice.assembly import assemble_scipy
+    from meicp.lattice.model import LatticeModel
+
+    scene = two_layer_scene(24, (2, 2), mu=1.0, states="slip-", shear=0.5)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    p = pieces_of(K, M, reduced_system(model, contact_sets(scene, model), ()), friction="unit")
+    N = p.N.toarray()
+    top = sl.eigh(-0.5 * (N + N.T), p.Kt.toarray(), eigvals_only=True)[-1]
+    mu = critical_friction(scene)
+    assert 0 < 1 / top <= mu.lower <= mu.upper
