@@ -79,6 +79,7 @@ def schur_complement(A, rows: np.ndarray, *, symmetric: bool, options: dict | No
     pcomm = A.getComm()
     rank = pcomm.getRank()
     ksp = PETSc.KSP().create(comm=pcomm)
+    pc = F = None
     try:
         ksp.setOperators(A)
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky" if symmetric else "lu", **_MUMPS}
@@ -106,6 +107,11 @@ def schur_complement(A, rows: np.ndarray, *, symmetric: bool, options: dict | No
             _check(lib.MatDenseRestoreArrayRead(raw, ctypes.byref(ptr)), "MatDenseRestoreArrayRead")
         _check(lib.MatDestroy(ctypes.byref(raw)), "MatDestroy")
     finally:
+        # the Python handles of the PC and its factor hold references of their own: drop
+        # them first, or the factor (a whole MUMPS factorisation) outlives the KSP
+        for handle in (F, pc):
+            if handle is not None:
+                handle.destroy()
         ksp.destroy()
     if pcomm.getSize() > 1:
         X = pcomm.tompi4py().bcast(X, root=0)
