@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import time
 
 import numpy as np
 import scipy.sparse as sp
@@ -46,6 +47,8 @@ CRITICAL_COND = 1e12
 EXACT_WIDTH = 1e-5
 #: certificate residual of a σ = 0 mode lifted to the whole reduced lattice
 MODE_TOL = 1e-9
+#: the search stops once a mode within this relative distance of the proved lower end is found
+SEARCH_CLOSE = 1e-3
 #: condensed candidates lifted (one solve each) before the upper end is given up
 MAX_LIFTS = 20
 
@@ -188,15 +191,28 @@ def _bracket(comm, model, red, K, M, A1, B1, mu_max: float) -> tuple[float, floa
 def _ends(comm, cond, red, A1, B1, mu_max: float):
     """The proved lower end (a :class:`~.mu_bracket.LowerEnd`), the certified upper end and
     its sentence (collective; the dense work on rank 0)."""
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        cond.seconds[name] = cond.seconds.get(name, 0.0) + now - clock
+        clock = now
+
     if not cond.prepare(need_tau=False, keep_factor=True):
         raise ProblemError(_singular_message(cond.why))
+    clock = time.perf_counter()  # prepare timed its own steps (held, probe)
     c0 = cond.at(0.0, xi=False)
+    lap("condense")
     S, R, eS, eR = c0.S, c0.R, c0.error_S, c0.error_R
     rank = 0 if comm is None else comm.Get_rank()
     found = None
     if rank == 0:
         low = lower_end(S, R, eS, eR, mu_max=mu_max)
-        found = (low, upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d))
+        lap("lower")
+        found = (low, upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d,
+                                       good_enough=low.mu * (1 + SEARCH_CLOSE)))
+        lap("search")
     if comm is not None and comm.Get_size() > 1:
         found = comm.bcast(found, root=0)
     low, candidates = found
@@ -212,6 +228,7 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
                 upper, mode_x = mu, xJ
                 mode_text = (f"σ = 0 mode at μ = {mu:.10g} on {sol.support.size} of {red.J.size} contact DOFs, "
                              f"certified on the whole reduced lattice (residual {sol.residual:.1e})")
+    lap("lift")
     if low.mu > upper * (1 + 1e-12):
         raise ConvergenceError(f"critical_friction: proof of no σ = 0 mode up to μ = {low.mu:.10g} above the "
                                f"certified mode at μ = {upper:.10g}: a rounding blunder, no bracket")
@@ -221,6 +238,9 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
         low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max))
     if comm is not None and comm.Get_size() > 1:
         low = comm.bcast(low if rank == 0 else None, root=0)
+    lap("refine")
+    log.info("critical_friction: |J| = %d, %s", red.J.size,
+             ", ".join(f"{k} {v:.1f} s" for k, v in cond.seconds.items()))
     return low, upper, mode_text
 
 

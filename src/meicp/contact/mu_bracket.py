@@ -100,13 +100,27 @@ def condensed_problem(S: np.ndarray, R: np.ndarray) -> EiCPProblem:
     return EiCPProblem.from_data(-S, R, np.arange(S.shape[0]))
 
 
-def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float, d=None) -> list:
-    """Certified condensed σ = 0 modes ``[(μ, x)]`` with μ ≤ mu_max, smallest μ first."""
+def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float, d=None,
+                     good_enough: float = 0.0) -> list:
+    """Certified condensed σ = 0 modes ``[(μ, x)]`` with μ ≤ mu_max, smallest μ first.  The
+    cheap sources first (the full support, the runs); the active-set starts (dense
+    eigen-solves of order up to |J| each) only while no candidate ≤ ``good_enough`` is
+    certified (e.g. just above the proved lower end: nothing smaller can exist)."""
     n = S.shape[0]
     problem = condensed_problem(S, R)
-    raw = []
-    raw += _full_support(S, R, near)
-    raw += _runs(S, R, min(MAX_RUN, n))
+    out, seen = [], set()
+
+    def take(raw):
+        for mu, x in raw:
+            if not (0 < mu <= mu_max) or x is None or round(mu, 12) in seen:
+                continue
+            sol = certify_pair(problem, mu, x)
+            if sol.residual <= CANDIDATE_TOL:
+                seen.add(round(mu, 12))
+                out.append((float(mu), sol.x))
+
+    take(_full_support(S, R, near))
+    take(_runs(S, R, min(MAX_RUN, n)))
     _, v = mu_bar(S, R, d)
     starts = [] if v is None else [v, -v]
     for k in (1, 2, 3, 5, 8, 13):
@@ -115,18 +129,9 @@ def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float
             s[idx] = 1.0
             starts.append(s)
     for s in starts + [None]:
-        raw.append(_active_set(S, R, s))
-    out, seen = [], set()
-    for mu, x in raw:
-        if not (0 < mu <= mu_max) or x is None:
-            continue
-        key = round(mu, 12)
-        if key in seen:
-            continue
-        sol = certify_pair(problem, mu, x)
-        if sol.residual <= CANDIDATE_TOL:
-            seen.add(key)
-            out.append((float(mu), sol.x))
+        if out and min(mu for mu, _ in out) <= good_enough:
+            break
+        take([_active_set(S, R, s)])
     return sorted(out, key=lambda t: t[0])
 
 
