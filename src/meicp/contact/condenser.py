@@ -184,3 +184,21 @@ def schur_error(comm, pieces: PencilPieces, solve_KFF) -> tuple[float, np.ndarra
     GV = H0[J][:, J] @ V - H0[J][:, F] @ XF
     rel = np.linalg.norm(G @ V - GV, axis=0) / (np.linalg.norm(V, axis=0) * max(np.abs(G).max(), 1e-300))
     return float(max(PROBE_SAFETY * rel.max(), SCHUR_ERROR_FLOOR)), X
+
+
+def on_root(comm, fn):
+    """``fn()`` run on rank 0 and its result broadcast; an exception raised there is raised on
+    every rank (no rank left waiting).  Serial: just ``fn()``.  Collective."""
+    if comm is None or comm.Get_size() == 1:
+        return fn()
+    outcome = None
+    if comm.Get_rank() == 0:
+        try:
+            outcome = (True, fn())
+        except Exception as exc:  # noqa: BLE001 — re-raised below, on every rank
+            outcome = (False, exc)
+    ok, value = comm.bcast(outcome, root=0)
+    if not ok:
+        raise value
+    return value
+

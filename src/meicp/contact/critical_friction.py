@@ -27,7 +27,7 @@ from ..petsc.comm import mpi_comm
 from ..petsc.pencil import reduced_pencil
 from ..scene import Scene
 from .condensation import lift
-from .condenser import Condenser
+from .condenser import Condenser, on_root
 from .instability import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
 from .maps import grazing_cases, reduced_system
 from .mu_bracket import extend_lower, lower_end, lower_from_mode, upper_candidates
@@ -205,17 +205,16 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
     c0 = cond.at(0.0, xi=False)
     lap("condense")
     S, R, eS, eR = c0.S, c0.R, c0.error_S, c0.error_R
-    rank = 0 if comm is None else comm.Get_rank()
-    found = None
-    if rank == 0:
+
+    def dense_ends():
         low = lower_end(S, R, eS, eR, mu_max=mu_max)
         lap("lower")
-        found = (low, upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d,
-                                       good_enough=low.mu * (1 + SEARCH_CLOSE)))
+        candidates = upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d,
+                                      good_enough=low.mu * (1 + SEARCH_CLOSE))
         lap("search")
-    if comm is not None and comm.Get_size() > 1:
-        found = comm.bcast(found, root=0)
-    low, candidates = found
+        return low, candidates
+
+    low, candidates = on_root(comm, dense_ends)
     upper, mode_x = np.inf, None
     mode_text = f"no σ = 0 mode found up to μ = {mu_max:g} ({len(candidates)} condensed candidates)"
     problem = EiCPProblem.from_data(A1, B1, red.J)
@@ -232,12 +231,15 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
     if low.mu > upper * (1 + 1e-12):
         raise ConvergenceError(f"critical_friction: proof of no σ = 0 mode up to μ = {low.mu:.10g} above the "
                                f"certified mode at μ = {upper:.10g}: a rounding blunder, no bracket")
-    if rank == 0 and mode_x is not None and upper - low.mu > EXACT_WIDTH * upper:
-        low = lower_from_mode(low, S, R, eS, eR, upper, mode_x)
-    if rank == 0 and (not np.isfinite(upper) or upper - low.mu > EXACT_WIDTH * upper):
-        low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max))
-    if comm is not None and comm.Get_size() > 1:
-        low = comm.bcast(low if rank == 0 else None, root=0)
+
+    def refine(low):
+        if mode_x is not None and upper - low.mu > EXACT_WIDTH * upper:
+            low = lower_from_mode(low, S, R, eS, eR, upper, mode_x)
+        if not np.isfinite(upper) or upper - low.mu > EXACT_WIDTH * upper:
+            low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max))
+        return low
+
+    low = on_root(comm, lambda proved=low: refine(proved))
     lap("refine")
     log.info("critical_friction: |J| = %d, %s", red.J.size,
              ", ".join(f"{k} {v:.1f} s" for k, v in cond.seconds.items()))

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..lcp.certificates import optimise_scaling, pd_certificate
 from ..petsc.comm import mpi_comm
-from .condenser import Condenser
+from .condenser import Condenser, on_root
 from .windows import cover
 
 
@@ -85,20 +85,20 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     t = time.perf_counter()
     if comm is None or comm.Get_size() == 1:
         out = _decide(cond.at, sigma_max, cond.tau, tol, max_samples)
-    elif rank == 0:
-        def served(sigma):
-            comm.bcast(sigma, root=0)
-            return cond.at(sigma)
-        try:
-            out = _decide(served, sigma_max, cond.tau, tol, max_samples)
-        finally:
-            comm.bcast(None, root=0)
     else:
-        while (sigma := comm.bcast(None, root=0)) is not None:
-            cond.at(sigma)
-        out = None
-    if comm is not None and comm.Get_size() > 1:
-        out = comm.bcast(out, root=0)
+        # rank 0 decides; the other ranks serve its condensations until it sends None
+        def decide():
+            def served(sigma):
+                comm.bcast(sigma, root=0)
+                return cond.at(sigma)
+            try:
+                return _decide(served, sigma_max, cond.tau, tol, max_samples)
+            finally:
+                comm.bcast(None, root=0)
+        if rank != 0:
+            while (sigma := comm.bcast(None, root=0)) is not None:
+                cond.at(sigma)
+        out = on_root(comm, decide)
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
     proved, test, statement, margin, samples, window = out
     return DivergenceProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
