@@ -12,6 +12,7 @@ NumPy/SciPy): ``G_μ = S + μR`` of order |J| (:mod:`.condensation` at σ = 0 wi
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,8 @@ from ..lcp.certificates import (certified_mu_lower_bound, chain_mu_lower_bound, 
 
 #: longest run of consecutive contacts tried as a support (modes localise at free edges)
 MAX_RUN = 16
+#: largest support the active set solves densely (the full support is the shift-and-invert's)
+ACTIVE_SET_MAX = 300
 #: certificate residual a condensed candidate must reach before it is lifted
 CANDIDATE_TOL = 1e-9
 
@@ -60,11 +63,13 @@ def lower_end(S: np.ndarray, R: np.ndarray, error_S: float, error_R: float, *, m
 
 
 def extend_lower(low: LowerEnd, S, R, error_S: float, error_R: float, *, mu_cap: float, tol: float = 0.0,
-                 attempts: int = 12) -> LowerEnd:
-    """Extend [0, low.mu] by segments with their own D, up to ``mu_cap`` (the best upper end)."""
+                 attempts: int = 12, seconds: float = np.inf) -> LowerEnd:
+    """Extend [0, low.mu] by segments with their own D, up to ``mu_cap`` (the best upper end),
+    for at most ``attempts`` segments and ``seconds``."""
     if not 0 < low.mu < mu_cap:
         return low
-    mu, segs = chain_mu_lower_bound(S, R, error_S, error_R, low.mu, mu_cap=mu_cap, max_attempts=attempts, tol=tol)
+    mu, segs = chain_mu_lower_bound(S, R, error_S, error_R, low.mu, mu_cap=mu_cap, max_attempts=attempts, tol=tol,
+                                    seconds=seconds)
     if mu <= low.mu:
         return low
     tail = "the last [μ_k, ∞) by sym(DR) ≻ 0" if not np.isfinite(mu) else f"to μ = {mu:.10g}"
@@ -101,11 +106,13 @@ def condensed_problem(S: np.ndarray, R: np.ndarray) -> EiCPProblem:
 
 
 def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float, d=None,
-                     good_enough: float = 0.0) -> list:
+                     good_enough: float = 0.0, seconds: float = np.inf) -> list:
     """Certified condensed σ = 0 modes ``[(μ, x)]`` with μ ≤ mu_max, smallest μ first.  The
     cheap sources first (the full support, the runs); the active-set starts (dense
-    eigen-solves of order up to |J| each) only while no candidate ≤ ``good_enough`` is
-    certified (e.g. just above the proved lower end: nothing smaller can exist)."""
+    eigen-solves on supports of at most ``ACTIVE_SET_MAX`` contacts) only while no candidate
+    ≤ ``good_enough`` is certified (e.g. just above the proved lower end: nothing smaller
+    can exist) and for at most ``seconds``."""
+    deadline = time.perf_counter() + seconds
     n = S.shape[0]
     problem = condensed_problem(S, R)
     out, seen = [], set()
@@ -128,8 +135,8 @@ def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float
             s = np.zeros(n)
             s[idx] = 1.0
             starts.append(s)
-    for s in starts + [None]:
-        if out and min(mu for mu, _ in out) <= good_enough:
+    for s in starts + ([None] if n <= ACTIVE_SET_MAX else []):
+        if (out and min(mu for mu, _ in out) <= good_enough) or time.perf_counter() > deadline:
             break
         take([_active_set(S, R, s)])
     return sorted(out, key=lambda t: t[0])
@@ -197,7 +204,7 @@ def _active_set(S, R, start, max_iter: int = 20):
     T = np.arange(n) if start is None else np.flatnonzero(start > 1e-3 * np.abs(start).max())
     seen = set()
     for _ in range(max_iter):
-        if T.size == 0 or tuple(T) in seen:
+        if T.size == 0 or T.size > ACTIVE_SET_MAX or tuple(T) in seen:
             break
         seen.add(tuple(T))
         w, V = sl.eig(-R[np.ix_(T, T)], S[np.ix_(T, T)])

@@ -24,6 +24,7 @@ P-matrix, hence in R₀; an entrywise error δ of G moves (𝓜(G)x)_i by at mos
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -243,13 +244,16 @@ def certified_mu_lower_bound(S, R, error_S: float, error_R: float, d: np.ndarray
 
 
 def chain_mu_lower_bound(S, R, error_S: float, error_R: float, mu_start: float, *, growth: float = 2.0,
-                         min_step: float = 1e-3, mu_cap: float = 1e4, max_attempts: int = 40, tol: float = 0.0):
+                         min_step: float = 1e-3, mu_cap: float = 1e4, max_attempts: int = 40, tol: float = 0.0,
+                         seconds: float = np.inf):
     """Extend a certified [0, μ_start] by segments [μ_k, μ_{k+1}], each with its own D
     certifying both ends (convexity: every μ between).  Every third attempt tries the ray
     [μ_k, ∞): one D with sym(D G_μk) ≻ 0 and sym(DR) ≻ 0 certifies every μ ≥ μ_k (G_μ is a
-    positive combination of the two).  Returns ``(μ_lo, segments)``."""
+    positive combination of the two).  Stops after ``seconds`` (what is proved by then
+    stands).  Returns ``(μ_lo, segments)``."""
     mu_k, segs, step, attempts = mu_start, [], growth, 0
-    while step - 1.0 > min_step and mu_k < mu_cap and attempts < max_attempts:
+    deadline = time.perf_counter() + seconds
+    while step - 1.0 > min_step and mu_k < mu_cap and attempts < max_attempts and time.perf_counter() < deadline:
         attempts += 1
         Ga, ea = S + mu_k * R, error_S + mu_k * error_R
         if attempts % 3 == 1:
