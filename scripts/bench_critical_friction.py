@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import time
 
 from bench_common import Stage, csv_path, write_rows
 from bench_scenes import two_layer_scene
