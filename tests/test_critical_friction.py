@@ -89,3 +89,15 @@ def test_the_lower_end_is_at_least_the_uncondensed_bound():
     top = sl.eigh(-0.5 * (N + N.T), p.Kt.toarray(), eigvals_only=True)[-1]
     mu = critical_friction(scene)
     assert 0 < 1 / top <= mu.lower <= mu.upper
+
+
+@pytest.mark.parametrize("name", ["frictional_interface", "sheared_slip_minus", "two_layers"])
+def test_the_bracket_contains_the_enumerated_value_on_shipped_scenes(name, monkeypatch):
+    """Including a frictional interface (its slip rows are in J too: at σ = 0 the split holds)."""
+    import meicp
+
+    scene = meicp.load_scene(Path(__file__).resolve().parents[1] / "data" / "scenes" / f"{name}.toml")
+    exact = critical_friction(scene, bisection=False)
+    monkeypatch.setattr(cf, "CRITICAL_J", 0)
+    b = critical_friction(scene)
+    assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
