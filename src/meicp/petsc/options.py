@@ -49,6 +49,8 @@ EICP_VI = "meicp_eicp_vi_"
 SELFCHECK = "meicp_selfcheck_"
 #: the complex shift-and-invert solves of the flutter search on a large sliding pencil
 FLUTTER = "meicp_flutter_"
+#: MUMPS factorisations of the condensation onto the contact DOFs (Schur complements, solves)
+SCHUR = "meicp_schur_"
 
 #: prefix → what reads options under it (``meicp --help`` lists these)
 PREFIXES = {
@@ -62,6 +64,7 @@ PREFIXES = {
     EICP_VI: "SNES VI of the semismooth EiCP method",
     SELFCHECK: "SLEPc EPS of meicp info --check",
     FLUTTER: "SLEPc EPS/ST (complex shift-and-invert, MUMPS LU) of the flutter search on a large pencil",
+    SCHUR: "MUMPS Schur complements and solves condensing a pencil onto its contact DOFs",
 }
 #: options PETSc reads only in PetscFinalize, after the end-of-run report
 _READ_AT_FINALIZE = {"options_left", "options_view", "malloc_dump", "malloc_view", "memory_view",
