@@ -28,7 +28,7 @@ from ..petsc.pencil import reduced_pencil
 from ..scene import Scene
 from .condensation import lift
 from .condenser import Condenser, on_root
-from .instability import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
+from .divergence import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
 from .maps import grazing_cases, reduced_system
 from .mu_bracket import extend_lower, lower_end, lower_from_mode, upper_candidates
 from .problem import contact_states, pencil_of

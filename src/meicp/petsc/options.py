@@ -51,6 +51,8 @@ SELFCHECK = "meicp_selfcheck_"
 FLUTTER = "meicp_flutter_"
 #: MUMPS factorisations of the condensation onto the contact DOFs (Schur complements, solves)
 SCHUR = "meicp_schur_"
+#: the Lanczos estimate of λ_max(sym A, sym B) that places the divergence search's σ-window
+WINDOW = "meicp_window_"
 
 #: prefix → what reads options under it (``meicp --help`` lists these)
 PREFIXES = {
@@ -65,6 +67,7 @@ PREFIXES = {
     SELFCHECK: "SLEPc EPS of meicp info --check",
     FLUTTER: "SLEPc EPS/ST (complex shift-and-invert, MUMPS LU) of the flutter search on a large pencil",
     SCHUR: "MUMPS Schur complements and solves condensing a pencil onto its contact DOFs",
+    WINDOW: "SLEPc EPS (Lanczos, no factorisation) estimating the top of the divergence σ-window",
 }
 #: options PETSc reads only in PetscFinalize, after the end-of-run report
 _READ_AT_FINALIZE = {"options_left", "options_view", "malloc_dump", "malloc_view", "memory_view",
