@@ -102,7 +102,7 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
     # 2. the σ-window
     petsc_options = dict(scene.petsc)
-    theta, converged, _ = rayleigh_estimate(A, B, options=petsc_options)
+    theta, converged, _ = rayleigh_estimate(A, B)  # its options: -meicp_window_* on the command line
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
     sigma_max = None
     if math.isfinite(theta):
