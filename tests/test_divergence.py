@@ -10,6 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import meicp
+from meicp.contact import divergence
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
 from bench_scenes import two_layer_scene  # noqa: E402
@@ -42,6 +43,19 @@ def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
     assert r.divergence is False
     assert r.proofs[0]["test"].startswith("rayleigh-window+condensed") and "σ_max" in r.evidence
+
+
+def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monkeypatch):
+    """When the top of (sym A, sym B) sits in the cluster of slow vibrations (a tall lattice:
+    Lanczos returns an unconverged Ritz value below it) no σ_max is certified; the condensed
+    proof then covers [0, ∞) — and proves nothing where a mode exists (the search from 0
+    misses the mode without the window's top: undecided, never stable)."""
+    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B: (-1.0, False, 60))
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
+    assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
+    assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "[0, inf]" in r.evidence
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
+    assert r.divergence is not False and r.stable is not True
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -62,12 +62,14 @@ class SignProof:
     proved: True (B ≻ 0 and A ≺ 0 with a margin above rounding: no σ ≥ 0), None (the
     largest eigenvalue of A lies within ``margin`` of 0: undecided), False (A has an
     eigenvalue above the margin, or B is not positive definite: the bound proves nothing).
-    reason: one sentence saying which.  margin: the rounding margin η used.
+    reason: one sentence saying which.  margin: the rounding margin η used.  above: the
+    eigenvalues of A proved above the margin (0 unless ``proved`` is False with B ≻ 0).
     """
 
     proved: bool | None
     reason: str
     margin: float
+    above: int = 0
 
 
 def rounding_margin(n: int) -> float:
@@ -121,7 +123,7 @@ def _negative_with_margin(A, B, name: str) -> SignProof:
         return SignProof(None, f"{above} eigenvalue(s) of {name} lie within rounding of 0 ({name} − η·diag|·| is "
                                f"negative definite, {name} + η·diag|·| is not; η = {eta:.1e}): undecided", eta)
     return SignProof(False, f"{name} has {clearly} eigenvalue(s) above rounding ({name} − η·diag|·| is not "
-                            f"negative definite, η = {eta:.1e}): the bound excludes nothing", eta)
+                            f"negative definite, η = {eta:.1e}): the bound excludes nothing", eta, clearly)
 
 
 def _size(M) -> int:

@@ -53,3 +53,4 @@ def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = 1e-8, options: dic
         eps.destroy()
         SA.destroy()
         SB.destroy()
+
