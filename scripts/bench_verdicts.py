@@ -66,7 +66,7 @@ def check(args):
     rng = np.random.default_rng(args.seed)
     rows = []
     for _ in range(args.count):
-        nx, lo, up = int(rng.integers(4, 13)), int(rng.integers(1, 4)), int(rng.integers(1, 4))
+        nx, lo, up = int(rng.integers(4, 17)), int(rng.integers(1, 4)), int(rng.integers(1, 4))
         state, shear = str(rng.choice(["slip+", "slip-"])), float(rng.choice([-0.5, 0.5]))
         mu = float(np.exp(rng.uniform(np.log(0.05), np.log(6.0))))
         scene = two_layer_scene(nx, (lo, up), mu=mu, states=state, shear=shear)
@@ -79,7 +79,7 @@ def check(args):
     write_rows(csv_path("verdicts_check"), rows, CHECK)
     wrong = sum(not r["agree"] for r in rows)
     decided = sum(r["window"] is not None for r in rows)
-    print(f"{len(rows)} scenes (|J| ≤ 12): decided {decided}, wrong {wrong}")
+    print(f"{len(rows)} scenes (|J| ≤ 16): decided {decided}, wrong {wrong}")
 
 
 def cost(args):
@@ -121,6 +121,9 @@ def chart(args):
 
     with csv_path("verdicts_family").open() as f:
         rows = list(csv.DictReader(f))
+    if csv_path("verdicts_cost").exists():  # the 10⁶-DOF points, on 2 ranks
+        with csv_path("verdicts_cost").open() as f:
+            rows += list(csv.DictReader(f))
     fig, ax = plt.subplots(figsize=(7, 4.5))
     style = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
              "None": ("s", "tab:gray", "undecided")}
@@ -134,7 +137,7 @@ def chart(args):
     ax.set_xlabel("friction μ")
     ax.set_ylabel("|J| sliding contacts")
     decided = sum(r["divergence"] != "None" for r in rows)
-    ax.set_title(f"analyze's divergence verdict past 16 contacts: {decided}/{len(rows)} decided")
+    ax.set_title(f"analyze's divergence verdict past 16 contacts: {decided}/{len(rows)} decided", fontsize=10)
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     fig.savefig(csv_path("verdicts_family").with_suffix(".png"), dpi=120)
