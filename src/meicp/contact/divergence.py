@@ -111,7 +111,7 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
              time.perf_counter() - t0)
     if at_zero.proved:
-        text = (f"Rayleigh bound: {at_zero.reason}; every MEiCP solution has σ = xᵀsym(A)x / xᵀsym(B)x < 0 "
+        text = (f"Rayleigh bound (LDLᵀ inertia): {at_zero.reason}; every MEiCP solution has σ = xᵀsym(A)x / xᵀsym(B)x < 0 "
                 "(a proof)")
         return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text, sigma_window=(0.0, math.inf))
     stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
