@@ -27,6 +27,7 @@ from bench_common import csv_path, slepc_eigensolve, write_rows
 from bench_scenes import two_layer_scene
 import meicp
 from meicp.contact import pencil
+from meicp.petsc.mat import is_petsc_mat, mat_from_scipy
 
 FAMILY = ["nx", "rows", "dofs", "J", "state", "shear", "mu", "divergence", "test", "sigma", "seconds", "evidence"]
 CHECK = ["nx", "rows", "J", "state", "shear", "mu", "truth", "window", "agree", "test"]
@@ -93,7 +94,10 @@ def cost(args):
             with pencil(scene, comm=comm) as pen:
                 comm.Barrier()
                 t0 = time.perf_counter()
-                slepc_eigensolve(pen.A, pen.B, 4)
+                A, B = pen.A, pen.B
+                if not is_petsc_mat(A):  # one rank: the pencil is SciPy
+                    A, B = mat_from_scipy(None, A), mat_from_scipy(None, B)
+                slepc_eigensolve(A, B, 4)
                 comm.Barrier()
                 eig = time.perf_counter() - t0
             comm.Barrier()
@@ -124,7 +128,7 @@ def chart(args):
     if csv_path("verdicts_cost").exists():  # the 10⁶-DOF points, on 2 ranks
         with csv_path("verdicts_cost").open() as f:
             rows += list(csv.DictReader(f))
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = plt.subplots(figsize=(8.5, 4.5))
     style = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
              "None": ("s", "tab:gray", "undecided")}
     for key, (marker, color, label) in style.items():
@@ -138,7 +142,7 @@ def chart(args):
     ax.set_ylabel("|J| sliding contacts")
     decided = sum(r["divergence"] != "None" for r in rows)
     ax.set_title(f"analyze's divergence verdict past 16 contacts: {decided}/{len(rows)} decided", fontsize=10)
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.tight_layout()
     fig.savefig(csv_path("verdicts_family").with_suffix(".png"), dpi=120)
 
