@@ -112,5 +112,39 @@ if wanted flutter; then begin flutter
     run "$PY" scripts/stability_map.py
     end flutter; fi
 
+# === critical_friction: the certified bracket past 20 contacts (issue 14 §4) ===
+if wanted critical_friction; then begin critical_friction
+    if [[ $mode == quick ]]; then
+        run "$PY" scripts/bench_critical_friction.py --nx 30 --rows 8 7 --repeats 1
+        run "$PY" scripts/bench_critical_friction.py --nx 100 --rows 25 25 --repeats 1
+    else
+        run "$PY" scripts/bench_critical_friction.py --nx 30 --rows 8 7 --repeats 5
+        run "$PY" scripts/bench_critical_friction.py --nx 100 --rows 25 25 --repeats 5
+        run "${MPI[@]}" "$PY" scripts/bench_critical_friction.py --nx 100 --rows 25 25 --repeats 5
+        run "$PY" scripts/bench_critical_friction.py --nx 300 --rows 75 75 --repeats 3
+        # 10⁶ DOFs (on a shared machine, one such run at a time: docs/benchmarks.md)
+        run "${MPI[@]}" "$PY" scripts/bench_critical_friction.py \
+            --nx 1000 --rows 250 250 --repeats 1
+    fi
+    chart critical_friction; end critical_friction; fi
+
+# === verdicts: decided fraction, agreement with enumeration, cost at 10⁶ DOFs (issue 14) ===
+if wanted verdicts; then begin verdicts
+    if [[ $mode == quick ]]; then
+        rm -f "$DIR"/verdicts_*.csv
+        run "$PY" scripts/bench_verdicts.py family --sizes 20:2+2 60:2+2
+        run "$PY" scripts/bench_verdicts.py check --count 10
+        run "${MPI[@]}" "$PY" scripts/bench_verdicts.py cost --nx 100 --rows 25 25 --mu 3 1
+    else
+        run "$PY" scripts/bench_verdicts.py family
+        run "$PY" scripts/bench_verdicts.py family --sizes 2000:10+10
+        run "$PY" scripts/bench_verdicts.py check --count 80
+        # 10⁶ DOFs, 1,000 sliding contacts (one such run at a time on a shared machine)
+        run "${MPI[@]}" "$PY" scripts/bench_verdicts.py cost --nx 1000 --rows 250 250 --states slip- --mu 3
+        run "${MPI[@]}" "$PY" scripts/bench_verdicts.py cost --nx 1000 --rows 250 250 --states slip+ --mu 0.1 1
+    fi
+    run "$PY" scripts/bench_verdicts.py chart
+    end verdicts; fi
+
 echo; echo "=== bench $mode: done in $((SECONDS - start_all)) s; results in $DIR ==="
 printf '%s\n' "${SUMMARY[@]}"

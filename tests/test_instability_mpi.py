@@ -68,3 +68,27 @@ def test_modal_analysis_on_two_ranks(comm, name, stable):
     if stable:
         for a, b in zip(par.modes, ser.modes):
             assert abs(a.x @ b.x) == pytest.approx(1.0, abs=1e-10)
+
+
+@pytest.mark.parametrize("state, mu, test", [("slip-", 3.0, "certified-mode"),
+                                             ("slip-", 1.2, "rayleigh-window+condensed-windows"),
+                                             ("slip+", 1.0, "rayleigh-inertia")])
+def test_the_verdict_at_scale_is_the_same_on_one_and_two_ranks(comm, state, mu, test):
+    """Past the enumeration budget (60 sliding contacts): the Rayleigh bound, the σ-window
+    and its condensed proof, and the search from the window's top give the same verdict,
+    proof and σ on 2 ranks as on 1."""
+    import sys
+
+    from meicp import analyze
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from bench_scenes import two_layer_scene
+
+    scene = two_layer_scene(60, (2, 2), mu=mu, states=state, shear=0.5)
+    par = analyze(scene, comm=comm, flutter=False)
+    ser = analyze(scene, flutter=False)
+    assert par.divergence == ser.divergence is not None
+    assert par.proofs[0]["test"] == ser.proofs[0]["test"] == test
+    assert [m.sigma for m in par.modes] == pytest.approx([m.sigma for m in ser.modes], rel=1e-8)
+    if ser.modes:
+        assert np.array_equal(par.modes[0].support, ser.modes[0].support)

@@ -46,9 +46,6 @@ from .exit import Exit
 
 #: what ``--method`` may choose: the MEiCP methods :func:`analyze` decides with
 METHODS = ("auto", "enumerate", "active-set")
-#: what μ_c's number means when it carries no evidence of its own
-MU_C_EVIDENCE = ("smallest μ with a σ = 0 divergence mode for these states; every support of the condensed "
-                 "EiCP in μ enumerated, certified")
 
 log = logging.getLogger("meicp")
 
@@ -164,7 +161,7 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
     if mu_c is None:
         doc["critical_friction"] = None
     else:
-        record = critical_friction_record(mu_c, MU_C_EVIDENCE)
+        record = critical_friction_record(mu_c)
         doc["critical_friction"] = {k: finite_or_none(v) if isinstance(v, float) else v for k, v in record.items()}
     doc["output"] = None if out is None else {"directory": str(out), **{k: str(v) for k, v in (files or {}).items()}}
     doc["wall"] = {k: finite_or_none(v) for k, v in (wall or {}).items()}
@@ -221,17 +218,19 @@ def _run(args, comm, t0) -> int:
     if args.critical_friction and not has_contact(scene):
         rows.append(("μ_c", "not applicable: the scene has no contact, hence no friction"))
     elif args.critical_friction:
-        log.info("critical friction: μ as the eigenvalue at σ = 0, condensed onto the contact DOFs and enumerated")
+        log.info("critical friction: μ as the eigenvalue at σ = 0, condensed onto the contact DOFs "
+                 "(enumerated up to 20 pairs, bracketed beyond)")
         t3 = time.perf_counter()
         with stage("critical_friction"):
-            mu_c = critical_friction(scene)  # serial and deterministic: every rank computes it alike
+            mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
         wall["critical_friction"] = time.perf_counter() - t3
-        rows.append(("μ_c", f"{mu_c:.10g}  ({MU_C_EVIDENCE})" if mu_c < float("inf") else "none up to μ = 1000"))
+        rows.append(("μ_c", mu_c.describe()))
+        rows.append(("", f"  {mu_c.evidence}"))
     if out is not None:
         log.info(f"writing results to {out}/")
         t2 = time.perf_counter()
         try:
-            record = None if mu_c is None else critical_friction_record(mu_c, MU_C_EVIDENCE)
+            record = None if mu_c is None else critical_friction_record(mu_c)
             files = write_results(out, scene, result, comm=comm, scene_text=scene_text, critical_friction=record,
                                   overrides=overrides(args))
         except BaseException:

@@ -1,12 +1,15 @@
 """The critical friction: the smallest μ at which a σ = 0 divergence mode exists,
-``meicp.critical_friction``.  μ becomes the eigenvalue of an EiCP at σ = 0, condensed onto
-the complementarity DOFs and enumerated; the derivation, the singular cases and the
-cost are in ``docs/critical-friction.md``.  Serial SciPy."""
+``meicp.critical_friction``, as a certified bracket.  μ becomes the eigenvalue of an EiCP at
+σ = 0, condensed onto the complementarity DOFs; up to ``CRITICAL_J`` pairs it is enumerated
+(exact), beyond that the lower end is a proof on the condensed matrix and the upper end a
+certified mode found by search (:mod:`.mu_bracket`).  The derivation, the singular cases
+and the cost are in ``docs/critical-friction.md``."""
 
 from __future__ import annotations
 
 import dataclasses
 import logging
+import time
 
 import numpy as np
 import scipy.sparse as sp
@@ -20,35 +23,99 @@ from ..eicp.solve import solve_eicp
 from ..lattice.model import LatticeModel
 from ..lattice.size import check_size
 from ..petsc.assembly import assemble
+from ..petsc.comm import mpi_comm
 from ..petsc.pencil import reduced_pencil
 from ..scene import Scene
-from .instability import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
+from .condensation import lift
+from .condenser import Condenser, on_root
+from .divergence import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
 from .maps import grazing_cases, reduced_system
+from .mu_bracket import extend_lower, lower_end, lower_from_mode, upper_candidates
 from .problem import contact_states, pencil_of
 
 log = logging.getLogger("meicp")
 
 #: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
-#: complementarity DOFs (order ≤ |J|): 3.3 s at |J| = 17, 15 s at |J| = 19 (about ×2.2 per pair)
+#: complementarity DOFs (order ≤ |J|) up to this many pairs: 3.3 s at |J| = 17, 15 s at
+#: |J| = 19 (about ×2.2 per pair); beyond it brackets μ_c (:mod:`.mu_bracket`)
 CRITICAL_J = 20
 #: the μ-independent block −A′ (and its Schur complement) counts as singular beyond this
 #: condition number: a motion of (near) zero stiffness, μ_c undefined
 CRITICAL_COND = 1e12
+#: a bracket is exact when upper − lower ≤ EXACT_WIDTH·upper (the lower end's certificate
+#: is taken 10⁻⁶ below its computed value, so a tighter tolerance could never be met)
+EXACT_WIDTH = 1e-5
+#: certificate residual of a σ = 0 mode lifted to the whole reduced lattice
+MODE_TOL = 1e-9
+#: the search stops once a mode within this relative distance of the proved lower end is found
+SEARCH_CLOSE = 1e-3
+#: time allowed to the active-set starts of the search, and to extending the lower end by
+#: segments (each; what is found or proved by then stands, and the evidence says it)
+DENSE_SECONDS = 60.0
+#: condensed candidates lifted (one solve each) before the upper end is given up
+MAX_LIFTS = 20
+
+
+class CriticalFriction(float):
+    """The critical friction as a float — the upper end: a μ at which a certified σ = 0 mode
+    exists (inf when none was found up to ``mu_max``) — carrying its certified bracket:
+    ``lower`` (no σ = 0 mode for any μ < lower, proved), ``upper`` (= the value), ``exact``
+    (μ_c is known: the ends meet within EXACT_WIDTH, or no mode exists up to ``mu_max``,
+    proved) and ``evidence`` (how each end was obtained)."""
+
+    lower: float
+    upper: float
+    exact: bool
+    evidence: str
+
+    def __new__(cls, upper: float, lower: float, exact: bool, evidence: str):
+        obj = super().__new__(cls, upper)
+        obj.upper, obj.lower, obj.exact, obj.evidence = float(upper), float(lower), bool(exact), str(evidence)
+        return obj
+
+    def __reduce__(self):
+        return (CriticalFriction, (self.upper, self.lower, self.exact, self.evidence))
+
+    @property
+    def width(self) -> float:
+        """(upper − lower)/upper: 0 when exact, inf without a mode."""
+        if self.upper == self.lower:
+            return 0.0
+        return (self.upper - self.lower) / self.upper if np.isfinite(self.upper) else np.inf
+
+    def describe(self) -> str:
+        """One line: ``1.4605 (exact)``, ``in [1.08, 1.4605] (width …)`` or ``≥ 2.3 (no σ = 0 mode
+        found …)``."""
+        if self.exact and np.isfinite(self.upper):
+            if self.lower == self.upper:
+                return f"{self.upper:.10g} (exact)"
+            return f"{self.upper:.10g} (exact within {self.width:.1e}: proved ≥ {self.lower:.10g})"
+        if self.exact:
+            return f"none up to μ = {self.lower:.6g} (proved)"
+        if not np.isfinite(self.upper):
+            return f"≥ {self.lower:.10g} (no σ = 0 mode found: upper end inf)"
+        return f"in [{self.lower:.10g}, {self.upper:.10g}] (width {100 * self.width:.2g} %)"
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
-                      condense: bool = True) -> float:
+                      condense: bool = True, comm=None) -> CriticalFriction:
     """The smallest μ ≥ 0 at which a σ = 0 divergence mode exists for the scene's states
     (prescribed ones; with ``"solve"`` the states of the static equilibrium at the scene's μ),
-    one μ for every frictional contact.  ``inf`` when there is none up to ``mu_max``.
+    one μ for every frictional contact, as a :class:`CriticalFriction`: a float (the upper
+    end, a μ with a certified mode; ``inf`` when none was found up to ``mu_max``) carrying
+    ``lower``, ``upper``, ``exact`` and ``evidence``.
 
     scene: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction` also reads a file).
     Solved as an EiCP in μ, condensed onto its complementarity DOFs
-    (docs/critical-friction.md) and enumerated: all 2^|J| supports of order ≤ |J|, a proof of the smallest μ,
-    for |J| ≤ ``CRITICAL_J`` (20) complementarity pairs per grazing case (ProblemError
-    beyond); the μ_c found is lifted back to the whole reduced lattice and certified there.
-    ``condense=False``: the former enumeration of the whole reduced pencil (order r per
-    support, at most 16 pairs and 600 reduced DOFs; slow, kept for cross-checks).
+    (docs/critical-friction.md).  Up to ``CRITICAL_J`` (20) complementarity pairs per grazing
+    case it is enumerated — all 2^|J| supports, exact — and the μ_c found is lifted back to
+    the whole reduced lattice and certified there.  Beyond, a bracket: the lower end is a
+    proof (diagonally scaled positive definiteness of the condensed S + μR on [0, lower]),
+    the upper end a σ = 0 mode found by a search on the condensed problem, lifted and
+    certified on the whole reduced lattice; condensations by MUMPS (collective on ``comm``;
+    None: this process alone).  ``condense=False``: the former enumeration of the whole
+    reduced pencil (order r per support, at most 16 pairs and 600 reduced DOFs; slow, kept
+    for cross-checks).
 
     A motion of zero stiffness once the slip DOFs are eliminated — a floating body, or a
     block free to slide as a whole — makes the μ-independent block singular.  If such a
@@ -56,18 +123,21 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     and μ_c is undefined: ProblemError.  If it is not (e.g. a layer between two sliding
     contacts slipping in opposite directions), the enumeration meets singular pencils on
     some supports, so the bisection check is then required (ProblemError if it is too large
-    for the default ``bisection=None``; a warning if ``bisection=False``).
+    for the default ``bisection=None``; a warning if ``bisection=False``); beyond CRITICAL_J
+    such a lattice is refused (the bracket needs the lattice held once the contacts are).
 
-    ``bisection``: cross-check on the σ-problem with the mass (a σ ≥ 0 mode must exist just
-    above μ_c and none just below, each decided by enumerating the whole reduced pencil;
-    ConvergenceError if they disagree).  ``None`` (default): run it when that enumeration is
-    within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9 flops, about ≤ 9 pairs on
-    ~150 reduced DOFs), skip it beyond; ``True``: always; ``False``: never.  Serial.
+    ``bisection``: cross-check of an enumerated μ_c on the σ-problem with the mass (a σ ≥ 0
+    mode must exist just above μ_c and none just below, each decided by enumerating the
+    whole reduced pencil; ConvergenceError if they disagree).  ``None`` (default): run it
+    when that enumeration is within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9
+    flops, about ≤ 9 pairs on ~150 reduced DOFs), skip it beyond; ``True``: always;
+    ``False``: never.  Never run for a bracket.
     """
+    comm = mpi_comm(comm)
     scene, model, sets = _friction_states(scene)
-    K, _ = assemble(model)
-    best = np.inf
-    small, singular = True, False
+    K, M = assemble(model)
+    ends, evidence = [], []
+    small, singular, enumerated = True, False, True
     for case in grazing_cases(sets):
         red = reduced_system(model, sets, case)
         # every case counts: the bisection check enumerates the σ-problem of each, with or without J
@@ -75,25 +145,108 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
         if red.J.size == 0:
             continue
         A1, B1 = _friction_pencil(K, red, sets)
-        if condense:
+        if not condense:
+            mu = _smallest_mu_full(A1, B1, red.J, mu_max)
+            ends.append((mu, mu))
+        elif red.J.size <= CRITICAL_J:
             mu, sing = _smallest_mu_condensed(A1, B1, red.J, mu_max)
             singular = singular or sing
+            ends.append((mu, mu))
         else:
-            mu = _smallest_mu_full(A1, B1, red.J, mu_max)
-        best = min(best, mu)
-    if singular and bisection is None and not small:
-        raise ProblemError("critical_friction: a motion of zero stiffness is left once the slip DOFs are "
-                           "eliminated (not compatible with the slip directions), so the enumeration meets "
-                           "singular pencils and needs the bisection check, but the σ-problem is too large to "
-                           "enumerate; pass bisection=True to run it anyway, or hold the body")
-    if bisection or (bisection is None and small):
-        _check_by_bisection(scene, sets, model, best, mu_max, tol)
-    elif singular:
-        log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
-                    "certified but its minimality is not cross-checked", best)
-    elif bisection is None:
-        log.info("critical_friction: bisection check skipped (the σ-problem is too large to enumerate)")
-    return float(best)
+            enumerated = False
+            lo, up, text = _bracket(comm, model, red, K, M, A1, B1, mu_max)
+            ends.append((lo, up))
+            evidence.append(text)
+    lower = min((lo for lo, _ in ends), default=np.inf)
+    upper = min((up for _, up in ends), default=np.inf)
+    if enumerated:
+        if singular and bisection is None and not small:
+            raise ProblemError("critical_friction: a motion of zero stiffness is left once the slip DOFs are "
+                               "eliminated (not compatible with the slip directions), so the enumeration meets "
+                               "singular pencils and needs the bisection check, but the σ-problem is too large to "
+                               "enumerate; pass bisection=True to run it anyway, or hold the body")
+        if bisection or (bisection is None and small):
+            _check_by_bisection(scene, sets, model, upper, mu_max, tol)
+        elif singular:
+            log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
+                        "certified but its minimality is not cross-checked", upper)
+        elif bisection is None:
+            log.info("critical_friction: bisection check skipped (the σ-problem is too large to enumerate)")
+        lower = mu_max if not np.isfinite(upper) else upper
+        text = ("every support of the condensed EiCP in μ enumerated" +
+                (f": no σ = 0 mode up to μ = {mu_max:g}" if not np.isfinite(upper) else
+                 ", the smallest μ certified on the whole reduced lattice"))
+        return CriticalFriction(upper, lower, True, text)
+    exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
+    return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
+
+
+def _bracket(comm, model, red, K, M, A1, B1, mu_max: float) -> tuple[float, float, str]:
+    """``(lower, upper, evidence)`` of one grazing case with |J| > CRITICAL_J (collective)."""
+    with Condenser(comm, model, red, friction="unit", K=K, M=M) as cond:
+        low, upper, mode_text = _ends(comm, cond, red, A1, B1, mu_max)
+        error_text = cond.error_text()
+    lower = min(low.mu, upper)
+    text = f"|J| = {red.J.size}: lower end {low.evidence}; upper end {mode_text}; {error_text}"
+    return lower, upper, text
+
+
+def _ends(comm, cond, red, A1, B1, mu_max: float):
+    """The proved lower end (a :class:`~.mu_bracket.LowerEnd`), the certified upper end and
+    its sentence (collective; the dense work on rank 0)."""
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        cond.seconds[name] = cond.seconds.get(name, 0.0) + now - clock
+        clock = now
+
+    if not cond.prepare(need_tau=False, keep_factor=True):
+        raise ProblemError(_singular_message(cond.why))
+    clock = time.perf_counter()  # prepare timed its own steps (held, probe)
+    c0 = cond.at(0.0, xi=False)
+    lap("condense")
+    S, R, eS, eR = c0.S, c0.R, c0.error_S, c0.error_R
+
+    def dense_ends():
+        low = lower_end(S, R, eS, eR, mu_max=mu_max)
+        lap("lower")
+        candidates = upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d,
+                                      good_enough=low.mu * (1 + SEARCH_CLOSE), seconds=DENSE_SECONDS)
+        lap("search")
+        return low, candidates
+
+    low, candidates = on_root(comm, dense_ends)
+    upper, mode_x = np.inf, None
+    mode_text = f"no σ = 0 mode found up to μ = {mu_max:g} ({len(candidates)} condensed candidates)"
+    problem = EiCPProblem.from_data(A1, B1, red.J)
+    with cond.factor_FF(0.0) as solve:
+        for mu, xJ in candidates[:MAX_LIFTS]:
+            if mu >= upper:
+                break
+            sol = certify_pair(problem, mu, lift(cond.pieces, 0.0, xJ, solve))
+            if sol.residual <= MODE_TOL:
+                upper, mode_x = mu, xJ
+                mode_text = (f"σ = 0 mode at μ = {mu:.10g} on {sol.support.size} of {red.J.size} contact DOFs, "
+                             f"certified on the whole reduced lattice (residual {sol.residual:.1e})")
+    lap("lift")
+    if low.mu > upper * (1 + 1e-12):
+        raise ConvergenceError(f"critical_friction: proof of no σ = 0 mode up to μ = {low.mu:.10g} above the "
+                               f"certified mode at μ = {upper:.10g}: a rounding blunder, no bracket")
+
+    def refine(low):
+        if mode_x is not None and upper - low.mu > EXACT_WIDTH * upper:
+            low = lower_from_mode(low, S, R, eS, eR, upper, mode_x)
+        if not np.isfinite(upper) or upper - low.mu > EXACT_WIDTH * upper:
+            low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max), seconds=DENSE_SECONDS)
+        return low
+
+    low = on_root(comm, lambda proved=low: refine(proved))
+    lap("refine")
+    log.info("critical_friction: |J| = %d, %s", red.J.size,
+             ", ".join(f"{k} {v:.1f} s" for k, v in cond.seconds.items()))
+    return low, upper, mode_text
 
 
 def friction_pencils(scene):
@@ -214,10 +367,6 @@ def _smallest_mu_condensed(A1, B1, J, mu_max):
     in ν = 1/μ, certified on the whole reduced pencil.  Returns (μ, singular): ``singular``
     when −Ac has a null space that is not sign-feasible (the enumeration met singular
     pencils; the caller must cross-check)."""
-    if J.size > CRITICAL_J:
-        raise ProblemError(f"critical_friction enumerates all 2^|J| supports of the EiCP condensed onto the "
-                           f"contact DOFs: |J| = {J.size} complementarity pairs (slipping or grazing contacts) "
-                           f"exceeds the limit CRITICAL_J = {CRITICAL_J}")
     Ac, Bc, Jc, lift, null = _condense(A1, B1, J)
     if null.shape[1] and _sign_feasible(null[Jc]):
         raise ProblemError(_singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular and its "

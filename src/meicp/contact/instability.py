@@ -7,10 +7,10 @@
    ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (:mod:`meicp.contact.problem`) and the MEiCP
    ``(σB − A)x = w`` solved for σ ≥ 0: by support enumeration when the reduced problem is
    small (every divergence mode; a complete enumeration that finds none, status
-   ``no_solution``, proves stability — ``undecided`` or ``out_of_range`` does not), else by
-   the SLEPc active-set search (one mode; no mode proves nothing unless the pencil is
-   symmetric and A is negative definite with a margin above rounding: the Rayleigh-quotient
-   bound, by LDLᵀ inertia, :func:`meicp.petsc.inertia.pencil_is_negative`).
+   ``no_solution``, proves stability — ``undecided`` or ``out_of_range`` does not), else
+   decided by :mod:`meicp.contact.divergence`: the Rayleigh bound (LDLᵀ inertia), the
+   certified σ-window [0, σ_max], the SLEPc active-set search from its top, and the
+   condensed proof on the window; undecided says what was established.
 4. Modes back in natural numbering: ``u = Q̃ x``.
 
 The verdict is about σ ≥ 0 whatever ``lam_min``: a negative σ is an oscillation, never a
@@ -22,7 +22,7 @@ A scene without contact has no frictional instability to decide: it gets a modal
 instead, its lowest vibration modes (:mod:`meicp.contact.modal`).  Each phase runs in its
 PETSc log stage (``-log_view``: static, assemble, reduce, eigen).
 
-The verdict logic lives here; the PETSc side (distributed pencil, inertia) in
+The verdict of each pencil is :mod:`meicp.contact.divergence`; the PETSc side (distributed pencil, inertia) in
 :mod:`meicp.petsc`.  The critical friction is :mod:`meicp.contact.critical_friction`.
 """
 
@@ -36,38 +36,26 @@ import numpy as np
 from ..core.errors import ProblemError
 from ..core.progress import Progress
 from ..core.validation import as_real, check_tol
-from ..eicp.problem import lam_floor
-from ..eicp.solve import available_methods, solve_eicp
+from ..eicp.solve import available_methods
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..lattice.size import check_size
 from ..petsc.comm import available_memory_on, comm_size, index_max, mpi_comm
-from ..petsc.inertia import pencil_is_negative
-from ..petsc.mat import destroying, max_abs_entry
+from ..petsc.mat import destroying
 from ..petsc.stages import stage
 from ..scene import Scene
+from .divergence import divergence_of
 from .flutter import analyze_flutter, not_analysed
 from .maps import grazing_cases
 from .modal import has_contact, modal_analysis
-from .problem import Pencil, contact_states, pencil_of
+from .problem import contact_states, pencil_of
 from .result import InstabilityResult, Mode
 
 log = logging.getLogger("meicp")
 
-#: reduced problems are enumerated when 2^|J| dense eigen-solves of size r cost at most
-#: about this many flops (2^|J|·r³), with r ≤ ENUMERATE_N and |J| ≤ ENUMERATE_J
-ENUMERATE_FLOPS = 2e9
-ENUMERATE_N = 600
-ENUMERATE_J = 16
 #: keywords ``analyze`` sets itself, or that would turn the verdict into a statement about a
 #: window of σ only (``lam_max``)
 RESERVED_OPTIONS = ("J", "comm", "lam_max", "all_solutions")
-
-
-def enumeration_is_small(r: int, n_j: int) -> bool:
-    """Whether 2^|J| dense eigen-solves of size r are within the enumeration budget
-    (``analyze``'s ``auto`` choice, and ``critical_friction``'s bisection check)."""
-    return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
 
 
 def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None, tol=None,
@@ -123,7 +111,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
     # -- one MEiCP per grazing case -------------------------------------------------------
     method = method or scene.solver.method
-    modes, evidences, stable_flags, eicps, sliding = [], [], [], [], None
+    modes, evidences, stable_flags, eicps, proofs, sliding = [], [], [], [], [], None
     n_grazing = sum(s == "grazing" for cs in sets for s in cs.states)
     progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
     with destroying(K, M):
@@ -143,10 +131,11 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                     evidences.append("every DOF is held (fixed or sticking): no mode can exist")
                     stable_flags.append(True)
                     eicps.append(None)
+                    proofs.append({"test": "all-held", "statement": evidences[-1]})
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    modes_c, evidence, stable, eicp = _solve_meicp(pen, scene, comm, method, lam_min, tol,
+                    modes_c, evidence, stable, eicp, proof = divergence_of(pen, scene, comm, method, lam_min, tol,
                                                                    solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
@@ -157,12 +146,14 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
             evidences.append(evidence)
             stable_flags.append(stable)
             eicps.append(eicp)
+            proofs.append(proof)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):
                 sliding = analyze_flutter(K, M, model, sets, scene, comm, static=static, options=dict(scene.petsc))
     modes.sort(key=lambda m: -m.sigma)
     result.modes = modes
     result.eicp = eicps
+    result.proofs = proofs
     if any(s is False for s in stable_flags):  # a mode with σ ≥ 0, listed or not (lam_min)
         result.stable = False
     elif all(s is True for s in stable_flags):
@@ -214,67 +205,3 @@ def _check_flutter(scene: Scene, flutter) -> bool:
     if not isinstance(flutter, (bool, np.bool_)):
         raise ProblemError(f"flutter must be True or False, got {flutter!r}")
     return bool(flutter)
-
-
-def _solve_meicp(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: float, options):
-    """The MEiCP of one pencil: its certified modes with σ ≥ lam_min, the evidence sentence,
-    the verdict on σ ≥ 0 (True proved stable, False a mode, None undecided) and the raw EiCP
-    result."""
-    A, B, red = pen.A, pen.B, pen.maps
-    solver = scene.solver
-    small = enumeration_is_small(red.retained.size, red.J.size)
-    chosen = method if method not in (None, "auto") else ("enumerate" if small else "active-set")
-    kwargs = dict(options)
-    if chosen == "active-set":
-        kwargs.setdefault("nev", solver.nev or 4)
-        kwargs.setdefault("target", 0.0)
-        kwargs.setdefault("options", dict(scene.petsc))
-        if solver.max_iterations:
-            kwargs.setdefault("max_iter", solver.max_iterations)
-    # the search covers every σ ≥ 0 (the verdict's threshold); lam_min filters the list only
-    eicp = solve_eicp(A, B, J=red.J, method=chosen, lam_min=0.0, tol=tol, comm=comm, **kwargs)
-    # a σ below 0 (even by 5e-11 just below μ_c) is not a divergence mode, but an exact σ = 0
-    # (a block free to slide as a whole) computed a few ulps below it is (eicp.problem.lam_floor)
-    scales = (max_abs_entry(A), max_abs_entry(B))
-    found = [_mode(sol, red) for sol in eicp.solutions if sol.lam >= lam_floor(0.0, scales)]
-    modes = [m for m in found if lam_min == 0 or m.sigma >= lam_floor(lam_min, scales)]
-    left_out = (f"; {len(found) - len(modes)} with 0 ≤ σ < lam_min = {lam_min:g} not listed"
-                if len(modes) < len(found) else "")
-    if any(m.sigma < 0 for m in found):
-        left_out += (f"; σ = {min(m.sigma for m in found):.2g} is 0 within rounding "
-                     f"(≥ {lam_floor(0.0, scales):.2g}): an exact σ = 0 mode")
-    if chosen == "enumerate":
-        cover = eicp.coverage.get("supports", 0)
-        if found:
-            return modes, (f"enumeration of all {cover} supports: {len(found)} divergence mode(s) with "
-                           f"σ ≥ 0{left_out}"), False, eicp
-        if eicp.status == "no_solution":
-            return [], f"enumeration of all {cover} supports: no solution with σ ≥ 0 (a proof)", True, eicp
-        return [], (f"enumeration of all {cover} supports found no mode, but this is not a proof "
-                    f"({eicp.status}): {eicp.message}"), None, eicp
-    if found:
-        return modes, (f"{chosen} search: a certified divergence mode after "
-                       f"{eicp.coverage.get('eigen_solves')} eigen-solves{left_out}"), False, eicp
-    # no mode found: a proof only for a symmetric pencil, through the Rayleigh bound
-    proof = pencil_is_negative(A, B)
-    if proof is not None and proof.proved:
-        return [], (f"symmetric pencil with no eigenvalue σ ≥ 0 (LDLᵀ inertia: {proof.reason}): every "
-                    "MEiCP solution is a Rayleigh quotient of the pencil, so none has σ ≥ 0 (a proof)"), True, eicp
-    why = "the pencil is not symmetric" if proof is None else proof.reason
-    return [], (f"{chosen} search found no mode with σ ≥ 0 ({eicp.status}); this is not a proof of "
-                f"stability: {why}"), None, eicp
-
-
-def _mode(sol, red) -> Mode:
-    u = red.Q @ sol.x
-    nrm = np.linalg.norm(u)
-    u = u / nrm if nrm > 0 else u
-    base_support, interface_support = [], {}
-    for j in sol.support:
-        name, idx, _ = red.pair_of[int(np.flatnonzero(red.J == j)[0])]
-        if name == "base":
-            base_support.append(idx)
-        else:
-            interface_support.setdefault(name, []).append(idx)
-    return Mode(float(sol.lam), u, np.unique(np.array(base_support, dtype=np.int64)), float(sol.residual),
-                {k: np.unique(v) for k, v in interface_support.items()})

@@ -139,6 +139,11 @@ class InstabilityResult(Result):
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
+    proofs: what stands behind the divergence verdict, one dict per MEiCP (grazing case):
+        ``test`` (``enumerate``, ``rayleigh-inertia``, ``rayleigh-window+condensed-…``,
+        ``certified-mode``, or ``""`` when nothing was proved), ``statement``, and for the
+        large-problem path ``sigma_window`` (the σ-interval proved free of modes, or None),
+        ``supports_visited``, ``eigen_solves`` (:mod:`meicp.contact.divergence`).
     eicp: the raw :class:`~meicp.eicp.problem.EiCPResult` of each MEiCP solved, one per
         grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
         case with every DOF held: nothing to solve); empty when no MEiCP was reached.
@@ -157,6 +162,7 @@ class InstabilityResult(Result):
     interface_states: dict = field(default_factory=dict)
     static: object = None
     eicp: list = field(default_factory=list)
+    proofs: list = field(default_factory=list)
     sizes: dict = field(default_factory=dict)
 
     @property
@@ -196,6 +202,7 @@ class InstabilityResult(Result):
             "divergence": self.divergence, "flutter": self.flutter,
             "status": self.status, "success": self.success, "message": self.message,
             "evidence": self.evidence, "iterations": int(self.iterations),
+            "proofs": [{str(k): _json_value(v) for k, v in p.items()} for p in self.proofs],
             "modes": [m.to_dict() for m in self.modes],
             "flutter_evidence": self.flutter_evidence,
             "flutter_modes": [m.to_dict() for m in self.flutter_modes],
@@ -325,3 +332,12 @@ def finite_or_none(value) -> float | None:
 def seconds(t: float) -> str:
     """A duration for people: milliseconds below a second."""
     return f"{t * 1e3:.1f} ms" if t < 1 else f"{t:.2f} s"
+
+
+def _json_value(v):
+    """A proof entry as a JSON value: tuples as lists, non-finite floats as None."""
+    if isinstance(v, (tuple, list)):
+        return [_json_value(x) for x in v]
+    if isinstance(v, float):
+        return finite_or_none(v)
+    return v

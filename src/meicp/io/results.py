@@ -26,7 +26,11 @@ In the output directory::
                                    undecided), ``evidence``, ``n_modes``, ``ranks``,
                                    ``units_convention``, ``divergence`` and ``flutter``
                                    (1 | 0 | -1 for undecided), ``flutter_evidence``,
-                                   ``n_flutter_modes``
+                                   ``n_flutter_modes``, ``divergence_tests`` (the test behind
+                                   each MEiCP's divergence verdict: enumerate,
+                                   rayleigh-inertia, rayleigh-window+condensed-…,
+                                   certified-mode, none) and ``divergence_proofs`` (JSON:
+                                   test, statement, sigma_window, supports visited)
 ``/scene``                         the scene as TOML text (the file's own text when known,
                                    else regenerated from the parsed scene)
 ``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
@@ -496,6 +500,8 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "n_modes": len(modes), "ranks": ranks, "analysis": analysis, "units_convention": UNITS_CONVENTION,
             **{name: {True: 1, False: 0}.get(getattr(result, name, None), -1) for name in ("divergence", "flutter")},
             "flutter_evidence": getattr(result, "flutter_evidence", ""),
+            "divergence_tests": ", ".join(p.get("test") or "none" for p in getattr(result, "proofs", [])),
+            "divergence_proofs": json.dumps(result.to_dict().get("proofs", []) if hasattr(result, "to_dict") else []),
             "n_flutter_modes": len(prep["flutter_modes"])})
         f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
 

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from ..core.validation import is_symmetric
 from . import import_petsc
 from .comm import mpi_comm
-from .mat import is_petsc_mat, mat_from_scipy
+from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
 from .options import INERTIA, OptionsScope
 
 PREFIX = INERTIA
@@ -62,12 +62,14 @@ class SignProof:
     proved: True (B ≻ 0 and A ≺ 0 with a margin above rounding: no σ ≥ 0), None (the
     largest eigenvalue of A lies within ``margin`` of 0: undecided), False (A has an
     eigenvalue above the margin, or B is not positive definite: the bound proves nothing).
-    reason: one sentence saying which.  margin: the rounding margin η used.
+    reason: one sentence saying which.  margin: the rounding margin η used.  above: the
+    eigenvalues of A proved above the margin (0 unless ``proved`` is False with B ≻ 0).
     """
 
     proved: bool | None
     reason: str
     margin: float
+    above: int = 0
 
 
 def rounding_margin(n: int) -> float:
@@ -82,22 +84,46 @@ def pencil_is_negative(A, B) -> SignProof | None:
     on this process) or PETSc Mats (collective)."""
     if not _symmetric(A) or not _symmetric(B):
         return None
+    return _negative_with_margin(A, B, "A")
+
+
+def rayleigh_bound(A, B, tau: float = 0.0) -> SignProof:
+    """Whether ``sym(A) − τ·sym(B) ≺ 0`` with ``sym(B) ≻ 0``, both with a margin above rounding.
+
+    For every MEiCP solution (x real, xᵀw = 0) ``σ·xᵀBx = xᵀAx``, i.e.
+    ``σ = xᵀsym(A)x / xᵀsym(B)x``: proved, no solution has σ ≥ τ (τ = 0: no divergence mode
+    at all).  Holds for a nonsymmetric pencil, a frictional interface's non-diagonal B
+    included.  A, B: SciPy or PETSc (collective)."""
+    SA, SB = symmetric_part(A), symmetric_part(B)
+    try:
+        if tau != 0.0:
+            if is_petsc_mat(SA):
+                PETSc = import_petsc()
+                SA.axpy(-float(tau), SB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+            else:
+                SA = (SA - float(tau) * SB).tocsr()
+        return _negative_with_margin(SA, SB, "sym(A)" if tau == 0.0 else f"sym(A) − {tau:.6g}·sym(B)")
+    finally:
+        for M in (SA, SB):
+            if is_petsc_mat(M):
+                M.destroy()
+
+
+def _negative_with_margin(A, B, name: str) -> SignProof:
     b_ok, b_text = _positive_definite(B)
     if not b_ok:
         return SignProof(False, b_text, 0.0)
     eta = rounding_margin(_size(A))
     above = nonnegative_count(A, eta)          # eigenvalues of D^-½ A D^-½ ≥ −η
     if above == 0:
-        return SignProof(True, f"A + η·diag|A| is negative definite (η = {eta:.1e}, above rounding) and "
+        return SignProof(True, f"{name} + η·diag|·| is negative definite (η = {eta:.1e}, above rounding) and "
                                f"{b_text}", eta)
     clearly = nonnegative_count(A, -eta)       # ... ≥ +η
     if clearly == 0:
-        return SignProof(None, f"{above} eigenvalue(s) of A lie within rounding of 0 (A − η·diag|A| is "
-                               f"negative definite, A + η·diag|A| is not; η = {eta:.1e}): whether σ ≥ 0 "
-                               "exists is undecided", eta)
-    return SignProof(False, f"A has {clearly} eigenvalue(s) above rounding (A − η·diag|A| is not negative "
-                            f"definite, η = {eta:.1e}): the pencil has eigenvalues σ > 0, so the bound "
-                            "excludes nothing", eta)
+        return SignProof(None, f"{above} eigenvalue(s) of {name} lie within rounding of 0 ({name} − η·diag|·| is "
+                               f"negative definite, {name} + η·diag|·| is not; η = {eta:.1e}): undecided", eta)
+    return SignProof(False, f"{name} has {clearly} eigenvalue(s) above rounding ({name} − η·diag|·| is not "
+                            f"negative definite, η = {eta:.1e}): the bound excludes nothing", eta, clearly)
 
 
 def _size(M) -> int:
@@ -141,7 +167,7 @@ def _diagonal_scale(diag: np.ndarray, rowmax: np.ndarray) -> np.ndarray:
 def _positive_definite(B) -> tuple[bool, str]:
     """Whether B ≻ 0: exactly for a diagonal B (every mass positive), else by the inertia of
     ``B − η·diag|B|``."""
-    diagonal, smallest = _diagonal_minimum(B)
+    diagonal, smallest = diagonal_minimum(B)
     if diagonal:
         if smallest > 0:
             return True, f"B is diagonal with positive entries (smallest {smallest:.3g})"
@@ -152,7 +178,7 @@ def _positive_definite(B) -> tuple[bool, str]:
         return True, f"B − η·diag|B| is positive definite (η = {eta:.1e})"
     return False, "B is not proved positive definite: the Rayleigh-quotient bound does not apply"
 
-def _diagonal_minimum(B) -> tuple[bool, float]:
+def diagonal_minimum(B) -> tuple[bool, float]:
     """(B has no off-diagonal entry, its smallest diagonal entry); collective for PETSc."""
     if is_petsc_mat(B):
         lo, _ = B.getOwnershipRange()

@@ -168,6 +168,21 @@ def diagonal(A):
     return A.getDiagonal()
 
 
+def symmetric_part(M):
+    """``(M + Mᵀ)/2``: SciPy in, SciPy out; a PETSc Mat in, a new PETSc Mat out (collective;
+    the caller destroys it)."""
+    if not is_petsc_mat(M):
+        M = sp.csr_matrix(M)
+        return ((M + M.T) * 0.5).tocsr()
+    PETSc = import_petsc()
+    MT = M.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() with no argument works in place
+    S = M.duplicate(copy=True)
+    S.axpy(1.0, MT, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    S.scale(0.5)
+    MT.destroy()
+    return S
+
+
 @contextmanager
 def destroying(*objects):
     """``with destroying(K, M) as (K, M):`` — the objects, and on exit ``destroy()`` (collective)

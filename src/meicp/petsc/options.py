@@ -49,6 +49,10 @@ EICP_VI = "meicp_eicp_vi_"
 SELFCHECK = "meicp_selfcheck_"
 #: the complex shift-and-invert solves of the flutter search on a large sliding pencil
 FLUTTER = "meicp_flutter_"
+#: MUMPS factorisations of the condensation onto the contact DOFs (Schur complements, solves)
+SCHUR = "meicp_schur_"
+#: the Lanczos estimate of λ_max(sym A, sym B) that places the divergence search's σ-window
+WINDOW = "meicp_window_"
 
 #: prefix → what reads options under it (``meicp --help`` lists these)
 PREFIXES = {
@@ -62,6 +66,8 @@ PREFIXES = {
     EICP_VI: "SNES VI of the semismooth EiCP method",
     SELFCHECK: "SLEPc EPS of meicp info --check",
     FLUTTER: "SLEPc EPS/ST (complex shift-and-invert, MUMPS LU) of the flutter search on a large pencil",
+    SCHUR: "MUMPS Schur complements and solves condensing a pencil onto its contact DOFs",
+    WINDOW: "SLEPc EPS (Lanczos, no factorisation) estimating the top of the divergence σ-window",
 }
 #: options PETSc reads only in PetscFinalize, after the end-of-run report
 _READ_AT_FINALIZE = {"options_left", "options_view", "malloc_dump", "malloc_view", "memory_view",

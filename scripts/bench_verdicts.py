@@ -1,0 +1,172 @@
+#!/usr/bin/env python3
+"""Divergence verdicts at scale (issue 14): how often ``analyze`` decides (a proof or a
+certified mode) on two-layer scenes past the enumeration budget, whether it ever contradicts
+enumeration, and what a verdict costs against one SLEPc eigen-solve of the same pencil.
+
+    .venv/bin/python scripts/bench_verdicts.py family            # -> verdicts_family.csv
+    .venv/bin/python scripts/bench_verdicts.py family --sizes 1000:10+10 2000:10+10
+    .venv/bin/python scripts/bench_verdicts.py check --count 80   # -> verdicts_check.csv
+    flock /work/scratch/bench.lock mpirun -n 2 .venv/bin/python scripts/bench_verdicts.py cost \\
+        --nx 1000 --rows 250 250 --mu 3 1                          # -> verdicts_cost.csv
+    .venv/bin/python scripts/bench_verdicts.py chart
+
+Scenes: ``two_layer_scene`` (k = 1 / 5, ρ = 1 / 2, top fixed, sides free), every base node
+in one slip state, |J| = nx sliding contacts; flutter is not part of these timings
+(``flutter=False``: issue 15's benchmark covers it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+from bench_common import csv_path, slepc_eigensolve, write_rows
+from bench_scenes import two_layer_scene
+import meicp
+from meicp.contact import pencil
+from meicp.petsc.mat import is_petsc_mat, mat_from_scipy
+
+FAMILY = ["nx", "rows", "dofs", "J", "state", "shear", "mu", "divergence", "test", "sigma", "seconds", "evidence"]
+CHECK = ["nx", "rows", "J", "state", "shear", "mu", "truth", "window", "agree", "test"]
+COST = ["nx", "rows", "dofs", "J", "ranks", "state", "shear", "mu", "divergence", "test", "sigma", "analyze_s",
+        "eigensolve_s", "ratio", "load1"]
+MUS = np.geomspace(0.05, 6.0, 8)
+
+
+def _verdict(scene, comm=None, method=None):
+    t0 = time.perf_counter()
+    r = meicp.analyze(scene, comm=comm, method=method, flutter=False)
+    return r, time.perf_counter() - t0
+
+
+def family(args):
+    rows = []
+    for size in args.sizes:
+        nx, lr = int(size.split(":")[0]), tuple(int(v) for v in size.split(":")[1].split("+"))
+        for state in ("slip+", "slip-"):
+            for shear in (0.5, -0.5):
+                for mu in (MUS if nx <= 200 else MUS[::3]):
+                    r, t = _verdict(two_layer_scene(nx, lr, mu=float(mu), states=state, shear=shear))
+                    p = r.proofs[0] if r.proofs else {}
+                    rows.append({"nx": nx, "rows": f"{lr[0]}+{lr[1]}", "dofs": r.sizes.get("dofs"),
+                                 "J": r.sizes.get("complementarity"), "state": state, "shear": shear,
+                                 "mu": f"{mu:.4g}", "divergence": r.divergence, "test": p.get("test", ""),
+                                 "sigma": f"{r.modes[0].sigma:.10g}" if r.modes else "",
+                                 "seconds": f"{t:.3f}", "evidence": r.evidence[:160]})
+                    print(rows[-1]["nx"], rows[-1]["rows"], state, shear, rows[-1]["mu"], r.divergence,
+                          rows[-1]["test"], rows[-1]["seconds"], flush=True)
+    write_rows(csv_path("verdicts_family"), rows, FAMILY)
+    decided = sum(r["divergence"] is not None for r in rows)
+    print(f"decided {decided}/{len(rows)} ({100 * decided / len(rows):.1f} %)")
+
+
+def check(args):
+    rng = np.random.default_rng(args.seed)
+    rows = []
+    for _ in range(args.count):
+        nx, lo, up = int(rng.integers(4, 17)), int(rng.integers(1, 4)), int(rng.integers(1, 4))
+        state, shear = str(rng.choice(["slip+", "slip-"])), float(rng.choice([-0.5, 0.5]))
+        mu = float(np.exp(rng.uniform(np.log(0.05), np.log(6.0))))
+        scene = two_layer_scene(nx, (lo, up), mu=mu, states=state, shear=shear)
+        truth, _ = _verdict(scene, method="enumerate")
+        window, _ = _verdict(scene, method="active-set")
+        agree = window.divergence is None or window.divergence == truth.divergence
+        rows.append({"nx": nx, "rows": f"{lo}+{up}", "J": nx, "state": state, "shear": shear, "mu": f"{mu:.4g}",
+                     "truth": truth.divergence, "window": window.divergence, "agree": agree,
+                     "test": window.proofs[0].get("test", "")})
+    write_rows(csv_path("verdicts_check"), rows, CHECK)
+    wrong = sum(not r["agree"] for r in rows)
+    decided = sum(r["window"] is not None for r in rows)
+    print(f"{len(rows)} scenes (|J| ≤ 16): decided {decided}, wrong {wrong}")
+
+
+def cost(args):
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    rows = []
+    for state in args.states:
+        for mu in args.mu:
+            scene = two_layer_scene(args.nx, tuple(args.rows), mu=mu, states=state, shear=args.shear)
+            with pencil(scene, comm=comm) as pen:
+                comm.Barrier()
+                t0 = time.perf_counter()
+                A, B = pen.A, pen.B
+                if not is_petsc_mat(A):  # one rank: the pencil is SciPy
+                    A, B = mat_from_scipy(None, A), mat_from_scipy(None, B)
+                slepc_eigensolve(A, B, 4)
+                comm.Barrier()
+                eig = time.perf_counter() - t0
+            comm.Barrier()
+            r, t = _verdict(scene, comm=comm)
+            if comm.rank == 0:
+                rows.append({"nx": args.nx, "rows": f"{args.rows[0]}+{args.rows[1]}", "dofs": r.sizes.get("dofs"),
+                             "J": r.sizes.get("complementarity"), "ranks": comm.size, "state": state,
+                             "shear": args.shear, "mu": mu, "divergence": r.divergence,
+                             "test": r.proofs[0].get("test", ""),
+                             "sigma": f"{r.modes[0].sigma:.13g}" if r.modes else "", "analyze_s": f"{t:.2f}",
+                             "eigensolve_s": f"{eig:.2f}", "ratio": f"{t / eig:.2f}",
+                             "load1": f"{os.getloadavg()[0]:.1f}"})
+                print(rows[-1], flush=True)
+                print(r.evidence, flush=True)
+    if comm.rank == 0:
+        write_rows(csv_path("verdicts_cost"), rows, COST)
+
+
+def chart(args):
+    import csv
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    with csv_path("verdicts_family").open() as f:
+        rows = list(csv.DictReader(f))
+    if csv_path("verdicts_cost").exists():  # the 10⁶-DOF points, on 2 ranks
+        with csv_path("verdicts_cost").open() as f:
+            rows += list(csv.DictReader(f))
+    fig, ax = plt.subplots(figsize=(8.5, 4.5))
+    style = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
+             "None": ("s", "tab:gray", "undecided")}
+    for key, (marker, color, label) in style.items():
+        sel = [r for r in rows if r["divergence"] == key]
+        if sel:
+            ax.scatter([float(r["mu"]) for r in sel], [int(r["J"]) * (1 + 0.03 * (r["state"] == "slip-")) for r in sel],
+                       marker=marker, color=color, label=f"{label}: {len(sel)}", alpha=0.7)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("friction μ")
+    ax.set_ylabel("|J| sliding contacts")
+    decided = sum(r["divergence"] != "None" for r in rows)
+    ax.set_title(f"analyze's divergence verdict past 16 contacts: {decided}/{len(rows)} decided", fontsize=10)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fig.tight_layout()
+    fig.savefig(csv_path("verdicts_family").with_suffix(".png"), dpi=120)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="what", required=True)
+    f = sub.add_parser("family")
+    f.add_argument("--sizes", nargs="+", default=["20:2+2", "60:2+2", "60:10+10", "200:10+10", "400:50+50"],
+                   help="lattices nx:lower+upper (rows appended to the CSV; every μ up to nx = 200, every "
+                        "third past it)")
+    c = sub.add_parser("check")
+    c.add_argument("--count", type=int, default=80)
+    c.add_argument("--seed", type=int, default=1)
+    k = sub.add_parser("cost")
+    k.add_argument("--nx", type=int, default=1000)
+    k.add_argument("--rows", type=int, nargs=2, default=(250, 250))
+    k.add_argument("--mu", type=float, nargs="+", default=[3.0, 1.0])
+    k.add_argument("--states", nargs="+", default=["slip-", "slip+"])
+    k.add_argument("--shear", type=float, default=0.5)
+    sub.add_parser("chart")
+    args = p.parse_args()
+    globals()[args.what](args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,131 @@
+"""Proofs that a contact state's MEiCP has no divergence mode (real σ ≥ 0) in a σ-window,
+by condensation onto the complementarity DOFs J (docs/critical-friction.md, "condensed
+tests"):
+
+    T1  σ = 0      G(0) ∈ R₀: a positive diagonal D with sym(DG(0)) ≻ 0 (one condensation)
+    T2  windows    G(σ) ∈ R₀ for every σ in [0, σ_max], by certificates on windows
+                   [σ_a, σ_b] from condensations at their ends (:mod:`.windows`)
+
+(G(σ) of :mod:`.condensation`; the certificates of :mod:`meicp.lcp.certificates`.)  Every
+certificate is decided with its rounding margin (the dense eigen-solve's and the
+condensation's error) and a caller's relative ``tol``: a borderline case is not proved.
+
+The condensations are those of :class:`.condenser.Condenser` (MUMPS: solves with a bounded
+error, or Schur complements with a measured one).  Collective on ``comm``; the dense
+certificates run on rank 0, the other ranks serve its condensations.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..lcp.certificates import optimise_scaling, pd_certificate
+from ..petsc.comm import mpi_comm
+from .condenser import Condenser, on_root
+from .windows import cover
+
+
+@dataclass(frozen=True)
+class DivergenceProof:
+    """What :func:`prove_no_divergence` established.
+
+    proved: True only if no MEiCP solution has σ in ``window`` (the whole asked window);
+    test: ``"condensed-pd"`` (T1: σ_max = 0, G(0) ∈ R₀ by scaled positive definiteness),
+    ``"condensed-windows"`` (T2) or ``""`` when not proved; statement: one sentence saying
+    what was proved or what stopped it; margin: the smallest certified margin (λ_min minus
+    its rounding allowance) over the certificates used, ≤ 0 or nan when not proved;
+    samples: condensations (σ samples) made; window: the σ-interval proved free of
+    divergence modes, ``(0.0, σ)`` — when not proved, the part covered from 0 (possibly
+    ``(0.0, 0.0)``: σ = 0 alone) or ``()`` (nothing)."""
+
+    proved: bool
+    test: str
+    statement: str
+    margin: float
+    samples: int
+    window: tuple
+    seconds: dict = field(default_factory=dict, compare=False)
+
+
+def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, method: str = "auto",
+                        max_samples: int = 16) -> DivergenceProof:
+    """Prove that the MEiCP of ``pencil`` has no solution with σ in [0, σ_max].
+
+    comm: the communicator (None: serial); collective.  pencil: a
+    :class:`~meicp.contact.problem.Pencil` (SciPy or distributed; only its ``model`` and
+    ``maps`` are read: the pieces K̃, M̃, N of the split pencil are rebuilt on every rank).
+    sigma_max: the caller's certified upper end of the window (no solution above it, e.g. by
+    an inertia of sym(σ_max B − A)); 0 asks for σ = 0 only; ``inf`` is allowed (the last
+    window is [σ_a, ∞)).  tol: relative margin every certificate must clear on top of its
+    rounding allowance.  method: ``"schur"``, ``"solves"`` or ``"auto"``
+    (:mod:`.condenser`).  max_samples: condensations allowed for the windows.
+
+    Contract: ``proved=True`` is a proof (every certificate re-checked with its margin; with
+    the Schur method the condensation error is measured, as the statement says);
+    ``proved=False`` proves nothing either way (a mode may or may not exist) and says why.
+    T2 needs a base contact with lumped mass (B diagonal: M̃ diagonal, N_M = 0); with a
+    frictional interface only σ_max = 0 can be proved (T1), a wider window is undecided.
+    """
+    comm = mpi_comm(comm)
+    rank = 0 if comm is None else comm.Get_rank()
+    t_start = time.perf_counter()
+    if not (sigma_max >= 0):
+        raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
+    if np.asarray(pencil.J).size == 0:
+        return DivergenceProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
+    cond = Condenser(comm, pencil.model, pencil.maps, method=method)
+    if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
+        return DivergenceProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
+                               "mass); this pencil couples contact and free DOFs through its mass (a frictional "
+                               "interface): only σ = 0 can be certified, the window is undecided", np.nan, 0, ())
+    if not cond.prepare(need_tau=sigma_max > 0):
+        return DivergenceProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
+    t = time.perf_counter()
+    if comm is None or comm.Get_size() == 1:
+        out = _decide(cond.at, sigma_max, cond.tau, tol, max_samples)
+    else:
+        # rank 0 decides; the other ranks serve its condensations until it sends None
+        def decide():
+            def served(sigma):
+                comm.bcast(sigma, root=0)
+                return cond.at(sigma)
+            try:
+                return _decide(served, sigma_max, cond.tau, tol, max_samples)
+            finally:
+                comm.bcast(None, root=0)
+        if rank != 0:
+            while (sigma := comm.bcast(None, root=0)) is not None:
+                cond.at(sigma)
+        out = on_root(comm, decide)
+    secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
+    proved, test, statement, margin, samples, window = out
+    return DivergenceProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
+
+
+def _decide(condense_at, sigma_max, tau, tol, max_samples):
+    """T1 then T2 on rank 0: ``(proved, test, statement, margin, samples, window)``."""
+    c0 = condense_at(0.0)
+    G0 = c0.G()
+    d, _ = optimise_scaling([G0], iters=40)
+    cert = pd_certificate(G0, c0.error(), d, tol=tol)
+    if not cert.proved:
+        return (False, "", f"σ = 0 not excluded: no diagonal scaling D found with sym(DG(0)) ≻ 0 beyond rounding "
+                f"(margin {cert.margin:.2e})", cert.margin, 1, ())
+    if sigma_max == 0:
+        return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
+                f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
+    cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol)
+    n = len(cov.samples)
+    if cov.proved:
+        margin = min([cert.margin] + [w[2] for w in cov.windows])
+        return (True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] ({len(cov.windows)} "
+                f"windows, {n} condensations, τ = {tau:.3g})", margin, n, (0.0, float(sigma_max)))
+    covered = 0.0
+    for a, b, *_ in sorted(cov.windows):
+        if a <= covered:
+            covered = max(covered, b)
+    a, b, m = cov.failed
+    return (False, "", f"window [{a:.6g}, {b:.6g}] not certified (margin {m:.2e}) after {n} condensations; "
+            f"proved free of modes: [0, {covered:.6g}]", m, n, (0.0, float(covered)))

@@ -1,0 +1,165 @@
+"""No MEiCP solution with σ in a window [σ_a, σ_b], from condensations at its ends
+(:mod:`.condensation`).
+
+Base contact with lumped mass (B diagonal, N_M = 0, M̃_FJ = 0).  In the M̃_F-orthonormal modes
+(ψ_i, λ_i) of (K̃_FF, M̃_F), for σ ≥ σ_a
+
+    G(σ) = G(σ_a) + (σ − σ_a) M_J + Σ_i φ_i(σ) w_i,   φ_i(σ) = (σ − σ_a)/(σ + λ_i),
+    w_i = (K̃ + μN)_JF ψ_i ψ_iᵀ K̃_FJ / (σ_a + λ_i),
+
+φ_i increasing in σ.  For a positive diagonal D and β > 0, completing the square per mode,
+
+    xᵀ D w_i x · φ_i(σ_b) ≥ −(r_iᵀx)²/(4β)·…   summed:   Σ_i φ_i(σ_b)·min(0, xᵀDw_ix) ≥ −xᵀ P Δ Pᵀ x / (4β),
+    P = (D − βI)K̃_JF + μ D N_JF,   Δ = H_FF(σ_a)⁻¹ − H_FF(σ_b)⁻¹  (Ξ blocks of both ends).
+
+Two window tests follow (either proves G(σ) ∈ R₀ for all σ in [σ_a, σ_b]):
+
+* ``end`` bound (σ_b = ∞ allowed, Ξ(∞) = 0): φ_i(σ) ∈ [0, φ_i(σ_b)], so
+  xᵀDG(σ)x ≥ xᵀ[sym(DG(σ_a)) − PΔPᵀ/(4β)]x.
+* ``chord`` bound (σ_b finite): with t = (σ − σ_a)/(σ_b − σ_a), G(σ) = (1 − t)G(σ_a) + tG(σ_b)
+  + Σ_i e_i φ_i(σ_b) w_i with 0 ≤ e_i = t(1 − t)(σ_b − σ_a)/(σ + λ_i) ≤ ē (λ_i ≥ τ, a
+  certified lower bound of λ_min(K̃_FF, M̃_F)), and λ_min is concave along the chord, so
+  Q_a = sym(DG(σ_a)) − ē·PΔPᵀ/(4β) ≻ 0 and Q_b = sym(DG(σ_b)) − ē·PΔPᵀ/(4β) ≻ 0 suffice.
+  ē ≈ 0.17 when σ_b + τ = 2(σ_a + τ): windows uniform in log(σ + τ).
+
+:func:`cover` chains windows from 0 to σ_max (a certified bound, e.g. the Rayleigh quotient's)
+or ∞, splitting failed windows in log(σ + τ) at new samples.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..lcp.certificates import optimise_scaling, pd_certificate, scaled
+
+
+def chord_factor(sa: float, sb: float, tau: float) -> float:
+    """ē = max over t ∈ [0, 1] of t(1 − t)(σ_b − σ_a)/(σ_a + t(σ_b − σ_a) + τ) (closed form
+    of the maximiser of t(1−t)/(c + t) with c = (σ_a + τ)/(σ_b − σ_a))."""
+    s = sb - sa
+    if s <= 0:
+        return 0.0
+    c = (sa + tau) / s
+    t = -c + np.sqrt(c * c + c)  # d/dt [t(1−t)/(c+t)] = 0
+    t = min(max(t, 0.0), 1.0)
+    return float(t * (1 - t) / (c + t)) * (1 + 1e-12)
+
+
+def pdp(ca, cb, mu: float, d: np.ndarray, beta: float) -> tuple[np.ndarray, float]:
+    """``(P Δ Pᵀ, error bound)`` for the window [ca.sigma, cb.sigma] (cb None: σ_b = ∞)."""
+    if cb is None:
+        dKK, dNK, dZ = ca.KK, ca.NK, ca.Z
+        eKK, eNK, eZ = ca.error_S, ca.error_R, ca.error_Z
+    else:
+        dKK, dNK, dZ = ca.KK - cb.KK, ca.NK - cb.NK, ca.Z - cb.Z
+        eKK, eNK, eZ = ca.error_S + cb.error_S, ca.error_R + cb.error_R, ca.error_Z + cb.error_Z
+    e = d - beta
+    X = (e[:, None] * dKK * e[None, :] + mu * (e[:, None] * dNK.T * d[None, :] + d[:, None] * dNK * e[None, :])
+         + mu * mu * d[:, None] * dZ * d[None, :])
+    en, dn = np.abs(e).max(), d.max()
+    return 0.5 * (X + X.T), float(en * en * eKK + 2 * mu * en * dn * eNK + mu * mu * dn * dn * eZ)
+
+
+def window_certificate(ca, cb, mu: float, d: np.ndarray, tau: float, tol: float = 0.0):
+    """The best of the end and chord bounds over a few β.  Returns ``(margin, how)``:
+    margin > 0 proves the window; ``how`` = (kind, β)."""
+    best = (-np.inf, None)
+    Ga = ca.G(mu)
+    for beta in [f * float(np.mean(d)) for f in (0.25, 0.5, 1.0, 2.0, 4.0)]:
+        X, eX = pdp(ca, cb, mu, d, beta)
+        # end bound
+        Qa = scaled(Ga, d) - X / (4 * beta)
+        c_end = pd_certificate(Qa, d.max() * ca.error(mu) + eX / (4 * beta), None, tol=tol)
+        if c_end.margin > best[0]:
+            best = (c_end.margin, ("end", beta))
+        if cb is not None:
+            eb = chord_factor(ca.sigma, cb.sigma, tau)
+            Qa = scaled(Ga, d) - eb * X / (4 * beta)
+            Qb = scaled(cb.G(mu), d) - eb * X / (4 * beta)
+            m = min(pd_certificate(Qa, d.max() * ca.error(mu) + eb * eX / (4 * beta), None, tol=tol).margin,
+                    pd_certificate(Qb, d.max() * cb.error(mu) + eb * eX / (4 * beta), None, tol=tol).margin)
+            if m > best[0]:
+                best = (m, ("chord", beta))
+        if best[0] > 0:
+            break
+    return best
+
+
+@dataclass
+class Cover:
+    proved: bool
+    windows: list = field(default_factory=list)   # (σ_a, σ_b, margin, (kind, β))
+    samples: list = field(default_factory=list)   # σ values condensed
+    failed: tuple | None = None                   # (σ_a, σ_b, margin) of the window that stopped it
+    seconds: float = 0.0
+
+
+def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_samples: int = 24,
+          initial: int = 1, optimise: bool = True, d_seed: np.ndarray | None = None, tol: float = 0.0) -> Cover:
+    """Prove G(σ) ∈ R₀ for every σ in [0, σ_max] (σ_max = ∞ allowed) by windows.
+
+    ``condense_at(σ)`` returns a :class:`~.condensation.Condensed` with the Ξ blocks.  ``tau``: the
+    certified lower bound of λ_min(K̃_FF, M̃_F).  ``d_seed``: the starting scaling of every
+    sample's optimisation (e.g. the critical-friction bracket's D, near-optimal at σ = 0).  The first windows split [0, σ_max] uniformly
+    in log(σ + τ) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
+    split at the geometric mean of its σ + τ ends, until ``max_samples`` condensations.
+    """
+    t0 = time.perf_counter()
+    cache, d_cache = {}, {}
+
+    def at(s):
+        if s not in cache:
+            cache[s] = condense_at(s)
+        return cache[s]
+
+    def scaling(s):
+        if s not in d_cache:
+            G = at(s).G(mu)
+            d = np.ones(G.shape[0]) if d_seed is None else d_seed
+            if optimise:
+                d, _ = optimise_scaling([G], d0=d, iters=40)
+            if d_seed is not None and (pd_certificate(G, at(s).error(mu), d_seed).margin / d_seed.mean()
+                                       > pd_certificate(G, at(s).error(mu), d).margin / d.mean()):
+                d = d_seed
+            d_cache[s] = d
+        return d_cache[s]
+
+    out = Cover(False)
+    if np.isfinite(sigma_max) and initial > 1:
+        pts = np.exp(np.linspace(np.log(tau), np.log(sigma_max + tau), initial + 1)) - tau
+        pts[0], pts[-1] = 0.0, sigma_max
+        pending = list(zip(pts[:-1], pts[1:]))
+    else:
+        pending = [(0.0, sigma_max)]
+    while pending:
+        a, b = pending.pop(0)
+        ca = at(a)
+        cb = at(b) if np.isfinite(b) else None
+        dopt = scaling(a)
+        best = (-np.inf, None)
+        # the scaling that best proves sym(DG(σ_a)) ≻ 0 may have a range that inflates
+        # (D − βI); try its powers D^t, t = 1, ½, 0 (D = I)
+        for t in (1.0, 0.5, 0.0):
+            m, how = window_certificate(ca, cb, mu, dopt ** t, tau, tol)
+            if m > best[0]:
+                best = (m, how)
+            if m > 0:
+                break
+        if best[0] > 0:
+            out.windows.append((a, b, best[0], best[1]))
+            continue
+        # no window can start at a sample that is not itself certified: stop splitting
+        if not pd_certificate(ca.G(mu), ca.error(mu), dopt, tol=tol).proved or len(cache) >= max_samples:
+            out.failed = (a, b, best[0])
+            break
+        mid = 2.0 * a + tau if not np.isfinite(b) else np.sqrt((a + tau) * (b + tau)) - tau
+        if not np.isfinite(b) and a == 0:
+            mid = 1.0
+        pending[:0] = [(a, mid), (mid, b)]
+    else:
+        out.proved = True
+    out.samples = sorted(cache)
+    out.seconds = time.perf_counter() - t0
+    return out

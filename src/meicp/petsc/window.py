@@ -1,0 +1,56 @@
+"""The top of the divergence σ-window: an estimate of ``λ_max(sym A, sym B)`` by SLEPc.
+
+Every MEiCP solution satisfies ``σ = xᵀsym(A)x / xᵀsym(B)x`` (complementarity gives
+``xᵀw = 0``), so no divergence mode lies above ``λ_max(sym A, sym B)``; the same bound holds
+for the real part of every eigenvalue of every support's pencil.  Krylov–Schur (Lanczos) on
+the symmetric-definite pencil finds it without a factorisation (B through its Jacobi
+"solve", exact for a lumped mass) when the top is isolated; when it sits in the cluster of
+slow vibrations near 0 Lanczos needs hundreds of restarts, so they are capped and the last
+Ritz value is returned.  A Ritz value is a *lower* estimate: the window claim is made by
+:func:`meicp.petsc.inertia.rayleigh_bound` (one LDLᵀ inertia), not here.  Options under
+``meicp_window_``.  Collective on the matrices' communicator.
+"""
+
+from __future__ import annotations
+
+import math
+
+from . import import_slepc
+from .inertia import diagonal_minimum
+from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
+from .options import WINDOW, OptionsScope
+
+
+def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = 1e-8, options: dict | None = None) -> tuple[float, bool, int]:
+    """``(θ, converged, restarts)``: θ the largest Ritz value of ``(sym A, sym B)`` seen (a
+    lower estimate of λ_max; exact to ``tol`` when ``converged``).  A, B: SciPy (solved on
+    this process) or PETSc Mats."""
+    SLEPc = import_slepc()
+    SA, SB = symmetric_part(A), symmetric_part(B)
+    if not is_petsc_mat(SA):
+        SA, SB = mat_from_scipy(None, SA), mat_from_scipy(None, SB)
+    seen = [-math.inf]
+
+    def monitor(eps_, its, nconv, eig, err):
+        if len(eig):
+            seen[0] = max(seen[0], max(e.real for e in eig))
+
+    eps = SLEPc.EPS().create(comm=SA.getComm())
+    try:
+        eps.setOperators(SA, SB)
+        defaults = {"eps_gen_hermitian": True, "eps_largest_real": True, "eps_nev": 1, "eps_tol": tol,
+                    "eps_max_it": max_it, "st_type": "shift", "st_ksp_type": "preonly", "st_pc_type": "jacobi"}
+        if not diagonal_minimum(SB)[0]:
+            defaults.update({"st_pc_type": "cholesky", "st_pc_factor_mat_solver_type": "mumps"})
+        eps.setMonitor(monitor)
+        with OptionsScope(WINDOW, defaults, options) as scope:
+            scope.configure(eps)
+            eps.solve()
+        converged = eps.getConverged() >= 1
+        theta = eps.getEigenvalue(0).real if converged else seen[0]
+        return float(theta), converged, int(eps.getIterationNumber())
+    finally:
+        eps.destroy()
+        SA.destroy()
+        SB.destroy()
+

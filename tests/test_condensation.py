@@ -1,0 +1,157 @@
+"""The condensation onto the contact DOFs (serial), its certificates against the enumeration
+oracle, and the condensed divergence proofs (issue 14, T1/T2)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+
+from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
+from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.maps import contact_sets, reduced_system
+from meicp.contact.problem import pencil
+from meicp.eicp.solve import solve_eicp
+from meicp.lattice.assembly import assemble_scipy
+from meicp.lattice.model import LatticeModel
+from meicp.lcp.certificates import (certified_mu_lower_bound, h_certificate, optimise_mu_scaling,
+                                    optimise_scaling, pd_certificate)
+from meicp.lcp.classes import classify
+from meicp.petsc.schur import dense_schur, mumps_factor
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from bench_scenes import two_layer_scene  # noqa: E402
+
+
+def split(nx=9, mu=1.3, states="slip-", shear=0.5, rows=(2, 2), **kw):
+    scene = two_layer_scene(nx, rows, mu=mu, states=states, shear=shear, **kw)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    red = reduced_system(model, contact_sets(scene, model), ())
+    return pieces_of(K, M, red), scene
+
+
+def dense_G(p, sigma):
+    H = p.H(sigma).toarray()
+    J, F = p.J, p.F
+    return H[np.ix_(J, J)] - H[np.ix_(J, F)] @ np.linalg.solve(H[np.ix_(F, F)], H[np.ix_(F, J)])
+
+
+@pytest.mark.parametrize("states", ["slip+", "slip-"])
+@pytest.mark.parametrize("sigma", [0.0, 0.7])
+def test_condensation_by_solves_and_by_schur_match_dense_and_the_bound_covers_the_error(states, sigma):
+    p, _ = split(states=states)
+    G = dense_G(p, sigma)
+    c = condense(p, sigma, mumps_factor(None), tau=0.05, xi=True)  # τ = 0.05 ≤ λ_min (checked below)
+    assert np.linalg.norm(c.G() - G, 2) <= c.error() < 1e-7
+    H, rows = p.bordered(sigma)
+    s = from_bordered_schur(p, sigma, dense_schur(None, H, rows, symmetric=True), 0.0)
+    assert np.allclose(s.G(), G, atol=1e-12 * np.abs(G).max())
+    assert np.allclose(s.Z, c.Z, atol=1e-12 * np.abs(c.Z).max())
+    F = p.F
+    lam = np.linalg.eigvalsh(np.linalg.solve(np.diag(p.Mt.diagonal()[F]), p.Kt[F][:, F].toarray()))
+    assert lam.min() > 0.05
+
+
+def test_no_tau_means_no_error_bound():
+    p, _ = split()
+    assert not np.isfinite(condense(p, 0.0, mumps_factor(None)).error())
+
+
+def test_scene_friction_and_unit_friction_pieces_agree():
+    p, _ = split(mu=1.3)
+    scene = two_layer_scene(9, (2, 2), mu=1.3, states="slip-", shear=0.5)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    red = reduced_system(model, contact_sets(scene, model), ())
+    u = pieces_of(K, M, red, friction="unit")
+    assert abs(u.N * 1.3 - p.N).max() < 1e-12
+    with pytest.raises(ValueError, match="friction"):
+        pieces_of(K, M, red, friction="bogus")
+
+
+# --- certificates against the enumeration oracle -------------------------------------------
+
+small = st.integers(2, 6).flatmap(lambda n: arrays(np.float64, (n, n), elements=st.integers(-4, 4).map(float)))
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(G=small, shift=st.integers(0, 6))
+def test_a_certificate_never_claims_R0_where_enumeration_finds_a_solution(G, shift):
+    G = G + shift * np.eye(G.shape[0])
+    d, _ = optimise_scaling([G], iters=30)
+    pd = pd_certificate(G, 0.0, d)
+    hm, _ = h_certificate(G, 0.0)
+    if pd.proved or hm > 0:
+        assert classify(G).r0 is True
+
+
+def test_borderline_is_not_proved():
+    assert not pd_certificate(np.diag([1.0, 1e-17, 2.0]), 0.0).proved
+    assert pd_certificate(np.diag([1.0, 1e-6, 2.0]), 0.0).proved
+    assert not pd_certificate(np.diag([1.0, 1e-6, 2.0]), 2e-6).proved      # the error bound eats the margin
+    assert not pd_certificate(np.diag([1.0, 1e-6, 2.0]), 0.0, tol=1e-5).proved
+    assert h_certificate(np.array([[1.0, -1.0], [-1.0, 1.0]]), 0.0)[0] <= 0  # singular comparison matrix
+
+
+def test_diagonal_scaling_proves_what_plain_definiteness_cannot():
+    G = np.array([[1.0, 3.0], [0.0, 1.0]])           # P-matrix, sym(G) indefinite
+    assert not pd_certificate(G, 0.0).proved
+    d, value = optimise_scaling([G], iters=200)
+    assert value > 0 and pd_certificate(G, 0.0, d).proved
+
+
+def test_certified_mu_segment_holds_at_every_mu_and_stops_before_a_solution():
+    rng = np.random.default_rng(3)
+    n = 6
+    X = rng.standard_normal((n, n))
+    S = X @ X.T + n * np.eye(n)
+    R = -np.abs(rng.standard_normal((n, n)))
+    d, mu_d = optimise_mu_scaling(S, R)
+    lo, c0, c1 = certified_mu_lower_bound(S, R, 0.0, 0.0, d, mu_d)
+    assert 0 < lo <= mu_d
+    for mu in np.linspace(0, lo, 7):
+        assert classify(S + mu * R).r0 is True
+
+
+# --- the proofs on scenes, against enumeration ------------------------------------------------
+
+def has_mode(scene):
+    pen = pencil(scene)
+    r = solve_eicp(pen.A.toarray(), pen.B.toarray(), J=pen.J, method="enumerate", lam_min=0.0)
+    return bool(r.solutions)
+
+
+@pytest.mark.parametrize("states,mu", [("slip+", 1.0), ("slip-", 0.8), ("slip-", 3.0), ("slip+", 40.0)])
+def test_a_proof_never_contradicts_enumeration(states, mu):
+    scene = two_layer_scene(7, (2, 2), mu=mu, states=states, shear=0.5)
+    proof = prove_no_divergence(None, pencil(scene), np.inf)
+    if proof.proved:
+        assert proof.test == "condensed-windows" and proof.window == (0.0, np.inf) and proof.margin > 0
+        assert not has_mode(scene)
+    else:
+        assert proof.test == "" and proof.statement
+
+
+def test_the_issue_scene_is_proved_stable_and_the_unstable_one_is_not():
+    stable = prove_no_divergence(None, pencil(two_layer_scene(60, (2, 2), mu=1.0, states="slip+", shear=0.5)), 1.0)
+    assert stable.proved and stable.window == (0.0, 1.0) and stable.samples >= 1
+    t1 = prove_no_divergence(None, pencil(two_layer_scene(60, (2, 2), mu=1.0, states="slip+", shear=0.5)), 0.0)
+    assert t1.proved and t1.test == "condensed-pd" and t1.window == (0.0, 0.0)
+    unstable = prove_no_divergence(None, pencil(two_layer_scene(60, (2, 2), mu=3.0, states="slip-", shear=0.5)), 1.0)
+    assert not unstable.proved and unstable.window == () and "σ = 0 not excluded" in unstable.statement
+
+
+def test_a_huge_tolerance_leaves_it_undecided():
+    scene = two_layer_scene(20, (2, 2), mu=1.0, states="slip+", shear=0.5)
+    assert not prove_no_divergence(None, pencil(scene), 1.0, tol=0.9).proved
+
+
+def test_a_frictional_interface_is_undecided_beyond_sigma_zero():
+    scene = two_layer_scene(8, (2, 2), mu=0.5, states="slip+", shear=0.5,
+                            interface={"kind": "frictional", "friction": 0.3, "states": "slip+"})
+    proof = prove_no_divergence(None, pencil(scene), 1.0)
+    assert not proof.proved and "diagonal B" in proof.statement
+    with pytest.raises(ValueError, match="sigma_max"):
+        prove_no_divergence(None, pencil(scene), -1.0)

@@ -1,0 +1,59 @@
+"""The condensation and the condensed proofs on 2 ranks: the same answers as serially."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
+from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.maps import contact_sets, reduced_system
+from meicp.contact.problem import pencil
+from meicp.lattice.assembly import assemble_scipy
+from meicp.lattice.model import LatticeModel
+from meicp.petsc.schur import dense_schur, mumps_factor
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from bench_scenes import two_layer_scene  # noqa: E402
+
+pytestmark = pytest.mark.mpi(min_size=2)
+
+
+def test_schur_and_solves_match_dense_on_two_ranks():
+    comm = MPI.COMM_WORLD
+    scene = two_layer_scene(9, (2, 2), mu=1.3, states="slip-", shear=0.5)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    p = pieces_of(K, M, reduced_system(model, contact_sets(scene, model), ()))
+    H = p.H(0.4).toarray()
+    J, F = p.J, p.F
+    G = H[np.ix_(J, J)] - H[np.ix_(J, F)] @ np.linalg.solve(H[np.ix_(F, F)], H[np.ix_(F, J)])
+    Hb, rows = p.bordered(0.4)
+    s = from_bordered_schur(p, 0.4, dense_schur(comm, Hb, rows, symmetric=True), 0.0)
+    assert np.allclose(s.G(), G, atol=1e-12 * np.abs(G).max())
+    c = condense(p, 0.4, mumps_factor(comm), tau=0.05, xi=True)
+    assert np.linalg.norm(c.G() - G, 2) <= c.error() < 1e-7
+
+
+@pytest.mark.parametrize("method", ["schur", "solves"])
+def test_proofs_agree_with_serial(method):
+    comm = MPI.COMM_WORLD
+    for states, mu, proved in [("slip+", 1.0, True), ("slip-", 3.0, False)]:
+        scene = two_layer_scene(30, (2, 2), mu=mu, states=states, shear=0.5)
+        with pencil(scene, comm=comm) as pen:
+            par = prove_no_divergence(comm, pen, 1.0, method=method)
+        ser = prove_no_divergence(None, pencil(scene), 1.0, method=method)
+        assert par.proved is ser.proved is proved
+        assert par.test == ser.test and par.window == ser.window
+        assert par.margin == pytest.approx(ser.margin, rel=1e-6, abs=1e-9)
+
+
+def test_critical_friction_bracket_on_two_ranks_matches_serial():
+    from meicp.contact.critical_friction import critical_friction
+
+    scene = two_layer_scene(30, (2, 2), mu=1.0, states="slip-", shear=0.5)
+    par = critical_friction(scene, comm=MPI.COMM_WORLD)
+    ser = critical_friction(scene)
+    assert par.exact and ser.exact
+    assert float(par) == pytest.approx(float(ser), rel=1e-9) and par.lower == pytest.approx(ser.lower, rel=1e-6)

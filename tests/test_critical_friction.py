@@ -1,0 +1,103 @@
+"""The certified bracket of the critical friction (issue 14 part 4): it contains the
+enumerated μ_c, its float behaves as a float, and a frictional interface or a large |J|
+still gets an honest answer."""
+import json
+import math
+import pickle
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import meicp.contact.critical_friction as cf
+from meicp.contact.critical_friction import CriticalFriction, critical_friction
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from bench_scenes import two_layer_scene  # noqa: E402
+
+SCENES = [(nx, states, shear) for nx in (6, 9, 12) for states in ("slip+", "slip-") for shear in (0.5, -0.5)]
+
+
+@pytest.mark.parametrize("nx,states,shear", SCENES)
+def test_the_bracket_contains_the_enumerated_critical_friction(nx, states, shear, monkeypatch):
+    scene = two_layer_scene(nx, (2, 2), mu=1.0, states=states, shear=shear)
+    exact = critical_friction(scene, bisection=False)
+    assert exact.exact and exact.lower == exact.upper == float(exact)
+    monkeypatch.setattr(cf, "CRITICAL_J", 0)  # force the bracket on a scene enumeration can check
+    b = critical_friction(scene)
+    assert b.lower <= b.upper and "lower end" in b.evidence
+    if math.isfinite(exact):
+        assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
+        assert math.isfinite(b.upper) and b.upper == pytest.approx(float(exact), rel=1e-9)  # found the mode
+    else:
+        assert b.upper == np.inf
+
+
+def test_the_float_behaves_as_a_float():
+    mu = CriticalFriction(1.5, 1.4, False, "a proof and a mode")
+    assert mu == 1.5 and mu + 1 == 2.5 and mu < 2 and f"{mu:.3f}" == "1.500" and math.isfinite(mu)
+    assert isinstance(mu, float) and json.dumps(float(mu)) == "1.5" and np.float64(mu) == 1.5
+    back = pickle.loads(pickle.dumps(mu))
+    assert (back, back.lower, back.upper, back.exact, back.evidence) == (1.5, 1.4, 1.5, False, "a proof and a mode")
+    assert "in [1.4, 1.5]" in mu.describe() and mu.width == pytest.approx(1 / 15)
+    none = CriticalFriction(np.inf, 3.0, False, "")
+    assert none == np.inf and none.width == np.inf and "no σ = 0 mode found" in none.describe()
+
+
+def test_a_wide_lattice_gets_a_narrow_bracket():
+    mu = critical_friction(two_layer_scene(60, (2, 2), mu=1.0, states="slip-", shear=0.5))
+    assert mu.exact and 1.080 < mu.lower <= mu.upper < 1.4605 and mu.width <= cf.EXACT_WIDTH  # issue 14: ≤ 1.4605
+    assert "certified on the whole reduced lattice" in mu.evidence
+
+
+def test_a_stable_direction_is_proved_free_of_modes_at_every_mu():
+    mu = critical_friction(two_layer_scene(40, (4, 4), mu=1.0, states="slip+", shear=0.5))
+    assert mu == np.inf and mu.lower == np.inf and mu.exact and "∞" in mu.evidence
+
+
+def test_cli_prints_the_bracket_and_results_h5_stores_it(cli, tmp_path):
+    import h5py
+
+    scenes = Path(__file__).resolve().parents[1] / "data" / "scenes"
+    text = (scenes / "two_layers.toml").read_text().replace("nx = 5", "nx = 30")
+    path = tmp_path / "wide.toml"
+    path.write_text(text)
+    code, out, err = cli("solve", path, "--critical-friction", "-o", tmp_path / "o", "-q")
+    assert code == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("μ_c"))
+    assert "exact" in line and "proved ≥" in line and "|J| = 30: lower end" in out
+    with h5py.File(tmp_path / "o" / "results.h5") as f:
+        g = f["critical_friction"].attrs
+        assert g["lower"] <= g["value"] == g["upper"] and bool(g["exact"]) and "upper end" in g["evidence"]
+
+
+def test_the_lower_end_is_at_least_the_uncondensed_bound():
+    """μ_lo = 1/λ_max(−sym(P̃₁KQ̃), Q̃ᵀKQ̃) of the issue; the condensed proof is never weaker."""
+    import scipy.linalg as sl
+
+    from meicp.contact.condensation import pieces_of
+    from meicp.contact.maps import contact_sets, reduced_system
+    from meicp.lattice.assembly import assemble_scipy
+    from meicp.lattice.model import LatticeModel
+
+    scene = two_layer_scene(24, (2, 2), mu=1.0, states="slip-", shear=0.5)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    p = pieces_of(K, M, reduced_system(model, contact_sets(scene, model), ()), friction="unit")
+    N = p.N.toarray()
+    top = sl.eigh(-0.5 * (N + N.T), p.Kt.toarray(), eigvals_only=True)[-1]
+    mu = critical_friction(scene)
+    assert 0 < 1 / top <= mu.lower <= mu.upper
+
+
+@pytest.mark.parametrize("name", ["frictional_interface", "sheared_slip_minus", "two_layers"])
+def test_the_bracket_contains_the_enumerated_value_on_shipped_scenes(name, monkeypatch):
+    """Including a frictional interface (its slip rows are in J too: at σ = 0 the split holds)."""
+    import meicp
+
+    scene = meicp.load_scene(Path(__file__).resolve().parents[1] / "data" / "scenes" / f"{name}.toml")
+    exact = critical_friction(scene, bisection=False)
+    monkeypatch.setattr(cf, "CRITICAL_J", 0)
+    b = critical_friction(scene)
+    assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)

@@ -1,0 +1,92 @@
+"""The divergence verdict past the enumeration budget (issue 14, :mod:`meicp.contact.divergence`):
+the issue's table rows decided, and the large-problem path never contradicting enumeration."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import meicp
+from meicp.contact import divergence
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from bench_scenes import two_layer_scene  # noqa: E402
+
+
+def _scene(nx, rows, state, mu, shear=0.5):
+    return two_layer_scene(nx, rows, mu=mu, states=state, shear=shear)
+
+
+def test_stable_by_the_rayleigh_bound_past_16_contacts():
+    """nx = 60, 2 + 2 rows, slip+, μ = 1: sym(−A) ≻ 0 (before: inconclusive)."""
+    r = meicp.analyze(_scene(60, (2, 2), "slip+", 1.0), flutter=False)
+    assert r.divergence is False and r.modes == []
+    assert r.proofs[0]["test"] == "rayleigh-inertia" and "(a proof)" in r.evidence
+
+
+def test_the_full_support_mode_is_found_from_the_top_of_the_window():
+    """nx = 60, 2 + 2 rows, slip−, μ = 3: the full support carries σ = 0.8188 (before:
+    cycling among the slow vibrations nearest 0)."""
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
+    assert r.divergence is True and np.isclose(r.modes[0].sigma, 0.818755, rtol=1e-5)
+    assert r.modes[0].residual < 1e-10 and r.proofs[0]["test"] == "certified-mode"
+    lo, hi = r.proofs[0]["sigma_window"]
+    assert lo == 0.0 and hi > r.modes[0].sigma
+
+
+def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():
+    """nx = 60, slip−, μ = 1.2 (below μ_c ≈ 1.46): sym(−A) is indefinite; the σ-window
+    [0, σ_max] is certified free of modes by the condensed tests."""
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
+    assert r.divergence is False
+    assert r.proofs[0]["test"].startswith("rayleigh-window+condensed") and "σ_max" in r.evidence
+
+
+def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monkeypatch):
+    """When the top of (sym A, sym B) sits in the cluster of slow vibrations (a tall lattice:
+    Lanczos returns an unconverged Ritz value below it) no σ_max is certified; the condensed
+    proof then covers [0, ∞) — and proves nothing where a mode exists (the search from 0
+    misses the mode without the window's top: undecided, never stable)."""
+    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B: (-1.0, False, 60))
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
+    assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
+    assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "[0, inf]" in r.evidence
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
+    assert r.divergence is not False and r.stable is not True
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(nx=st.integers(4, 9), lower=st.integers(1, 3), upper=st.integers(1, 3),
+       state=st.sampled_from(["slip+", "slip-"]), shear=st.sampled_from([-0.5, 0.5]),
+       mu=st.floats(0.05, 6.0))
+def test_the_large_problem_path_never_contradicts_enumeration(nx, lower, upper, state, shear, mu):
+    """Forced on small scenes, the window path (Rayleigh bound, σ-window, search from its top,
+    condensed proof) agrees with the enumeration of every support whenever it decides, and
+    its mode is the enumeration's fastest."""
+    scene = _scene(nx, (lower, upper), state, mu, shear)
+    truth = meicp.analyze(scene, method="enumerate", flutter=False)
+    window = meicp.analyze(scene, method="active-set", flutter=False)
+    assert truth.divergence is not None
+    if window.divergence is True:
+        assert truth.divergence is True
+        assert np.isclose(window.modes[0].sigma, truth.modes[0].sigma, rtol=1e-8, atol=1e-12) or any(
+            np.isclose(window.modes[0].sigma, m.sigma, rtol=1e-8) for m in truth.modes)
+    elif window.divergence is False:
+        assert truth.divergence is False, window.evidence
+    else:
+        assert "undecided" in window.evidence
+
+
+@pytest.mark.parametrize("top", ["fixed", "free"])
+def test_a_rigid_motion_is_never_proved_away(top):
+    """Every contact separated: with the top free the lattice floats (σ = 0 rigid motions,
+    within rounding of the Rayleigh bound) — never "no divergence"; held at the top it is
+    proved stable."""
+    scene = two_layer_scene(8, (2, 2), mu=1.0, states="separated", top=top)
+    r = meicp.analyze(scene, method="active-set", flutter=False)
+    assert r.divergence is (False if top == "fixed" else r.divergence)
+    if top == "free":
+        assert r.divergence is not False
