@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 import meicp
 from meicp.contact import divergence
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
 from bench_scenes import two_layer_scene  # noqa: E402
 
 
@@ -95,6 +96,23 @@ def test_without_a_window_the_proof_on_every_sigma_never_contradicts_enumeration
     window = meicp.analyze(scene, method="active-set", flutter=False)
     if window.divergence is not None:
         assert window.divergence == truth.divergence, window.evidence
+
+
+@pytest.mark.parametrize("mu", [0.5, 3.0])
+def test_a_frictional_interface_past_16_contacts_gets_a_verdict_not_an_error(mu):
+    """80 sliding interface pairs: at μ = 0.5 the Rayleigh bound proves stability; at μ = 3
+    sym(B) is indefinite (no Rayleigh quotient, and Lanczos on (sym A, sym B) breaks down —
+    it used to end in a PETSc error): undecided, with that reason."""
+    from meicp.io.scene import loads_scene
+
+    text = (ROOT / "data" / "scenes" / "frictional_interface.toml").read_text()
+    text = text.replace("nx = 10", "nx = 80").replace("friction = 0.5", f"friction = {mu}")
+    r = meicp.analyze(loads_scene(text), flutter=False)
+    if mu == 0.5:
+        assert r.divergence is False and r.proofs[0]["test"] == "rayleigh-inertia"
+    else:
+        assert r.divergence is None and "B is not proved positive definite" in r.evidence
+        assert "σ-window" in r.evidence
 
 
 @pytest.mark.parametrize("top", ["fixed", "free"])

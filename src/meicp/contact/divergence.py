@@ -117,14 +117,17 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
     # 2. the σ-window
     petsc_options = dict(scene.petsc)
-    theta, converged, _ = rayleigh_estimate(A, B)  # its options: -meicp_window_* on the command line
+    # its options: -meicp_window_* on the command line; without sym(B) ≻ 0 (a frictional
+    # interface at large μ) no Rayleigh quotient bounds σ and Lanczos would break down
+    theta, converged = (rayleigh_estimate(A, B)[:2] if at_zero.b_definite else (math.nan, False))
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
     # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
     sigma_max = _certified_top(A, B, theta, scale) if converged or not at_zero.above else None
     log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
              time.perf_counter() - t0)
     if sigma_max is None:
-        stopped.append(f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)")
+        stopped.append(f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)"
+                       if math.isfinite(theta) else "no σ-window (λ_max(sym A, sym B) not estimated)")
     # 3. modes from the top: a short search first (a mode on the full support, or one
     # support update away, is found at once), then the condensed proof, then — neither
     # decided — the whole search; on a stable lattice a long search finds nothing and costs
@@ -165,9 +168,9 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     # 175 s at 3·10⁵ DOFs where the whole proof on [0, ∞) takes 16 s)
     upper = sigma_max if sigma_max is not None else math.inf
     condensed = prove_no_divergence(comm, pen, upper, tol=tol)
-    log.info("divergence: condensed proof %s, %d condensation(s) (%.2f s: %s)",
+    log.info("divergence: condensed proof %s, %d condensation(s) (%.2f s%s)",
              "holds" if condensed.proved else "stopped", condensed.samples, time.perf_counter() - t0,
-             ", ".join(f"{k} {v:.1f}" for k, v in condensed.seconds.items()))
+             "".join(f", {k} {v:.1f}" for k, v in condensed.seconds.items()))
     if condensed.proved:
         if sigma_max is not None:
             text = (f"no solution above σ_max = {sigma_max:.6g} (Rayleigh bound, LDLᵀ inertia) and "

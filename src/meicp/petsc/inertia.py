@@ -64,12 +64,14 @@ class SignProof:
     eigenvalue above the margin, or B is not positive definite: the bound proves nothing).
     reason: one sentence saying which.  margin: the rounding margin η used.  above: the
     eigenvalues of A proved above the margin (0 unless ``proved`` is False with B ≻ 0).
+    b_definite: whether B ≻ 0 was proved (False: no Rayleigh-quotient bound holds at all).
     """
 
     proved: bool | None
     reason: str
     margin: float
     above: int = 0
+    b_definite: bool = True
 
 
 def rounding_margin(n: int) -> float:
@@ -112,7 +114,7 @@ def rayleigh_bound(A, B, tau: float = 0.0) -> SignProof:
 def _negative_with_margin(A, B, name: str) -> SignProof:
     b_ok, b_text = _positive_definite(B)
     if not b_ok:
-        return SignProof(False, b_text, 0.0)
+        return SignProof(False, b_text, 0.0, b_definite=False)
     eta = rounding_margin(_size(A))
     above = nonnegative_count(A, eta)          # eigenvalues of D^-½ A D^-½ ≥ −η
     if above == 0:

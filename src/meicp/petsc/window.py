@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from . import import_slepc
+from . import import_petsc, import_slepc
 from .inertia import diagonal_minimum
 from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
 from .options import WINDOW, OptionsScope
@@ -23,9 +23,9 @@ from .options import WINDOW, OptionsScope
 
 def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = 1e-8, options: dict | None = None) -> tuple[float, bool, int]:
     """``(θ, converged, restarts)``: θ the largest Ritz value of ``(sym A, sym B)`` seen (a
-    lower estimate of λ_max; exact to ``tol`` when ``converged``).  A, B: SciPy (solved on
+    lower estimate of λ_max; exact to ``tol`` when ``converged``; nan when SLEPc fails).  A, B: SciPy (solved on
     this process) or PETSc Mats."""
-    SLEPc = import_slepc()
+    PETSc, SLEPc = import_petsc(), import_slepc()
     SA, SB = symmetric_part(A), symmetric_part(B)
     if not is_petsc_mat(SA):
         SA, SB = mat_from_scipy(None, SA), mat_from_scipy(None, SB)
@@ -43,14 +43,20 @@ def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = 1e-8, options: dic
         if not diagonal_minimum(SB)[0]:
             defaults.update({"st_pc_type": "cholesky", "st_pc_factor_mat_solver_type": "mumps"})
         eps.setMonitor(monitor)
-        with OptionsScope(WINDOW, defaults, options) as scope:
-            scope.configure(eps)
-            eps.solve()
+        try:
+            with OptionsScope(WINDOW, defaults, options) as scope:
+                scope.configure(eps)
+                eps.solve()
+        except PETSc.Error:  # e.g. a breakdown of the B-inner product: no estimate, no window
+            return math.nan, False, 0
         converged = eps.getConverged() >= 1
         theta = eps.getEigenvalue(0).real if converged else seen[0]
         return float(theta), converged, int(eps.getIterationNumber())
     finally:
-        eps.destroy()
+        try:
+            eps.destroy()
+        except PETSc.Error:  # SLEPc 3.18 cannot destroy a DS left mid-factorisation by a failed solve
+            pass
         SA.destroy()
         SB.destroy()
 
