@@ -158,3 +158,19 @@ def test_a_floating_lattice_has_no_friction_range():
     with pencil(two_layer_scene(20, (2, 2), mu=1.0, states="slip+", top="free")) as pen:
         reach = proved_friction_range(pen)
     assert reach.scale == 0.0 and reach.factorisations == 1 and "no friction range proved" in reach.statement
+
+
+def test_the_friction_range_on_300_sliding_base_contacts():
+    """The friction range of 300 sliding base contacts at μ = 3, checked on the pencils of the
+    μ it names: the Rayleigh bound proves stability just below it, not 20 % above."""
+    from meicp.contact.friction_range import proved_friction_range
+    from meicp.contact.problem import pencil
+    from meicp.petsc.inertia import rayleigh_bound
+
+    with pencil(_scene(300, (4, 4), "slip+", 3.0)) as pen:
+        reach = proved_friction_range(pen)
+    mu_r = reach.friction["base"]
+    assert 0 < mu_r < 3.0 and reach.failed <= 1.1 * reach.scale and reach.factorisations <= 8
+    for mu, proved in ((0.999 * mu_r, True), (1.2 * mu_r, False)):
+        with pencil(_scene(300, (4, 4), "slip+", mu)) as pen:
+            assert (rayleigh_bound(pen.A, pen.B).proved is True) is proved
