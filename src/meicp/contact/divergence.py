@@ -196,6 +196,10 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     # 5. undecided, with what was established: the window, the supports, and the friction up
     # to which these contact states are proved stable
     t = time.perf_counter()
+    if at_zero.b_definite:
+        # the first bound spared the inertia that tells "within rounding of 0" (rigid
+        # motions, a borderline μ) from a clear failure; an undecided verdict says which
+        stopped[0] = f"Rayleigh bound at 0: {rayleigh_bound(A, B, 0.0).reason}"
     reach = proved_friction_range(pen)
     log.info("divergence: friction range proved up to %.4g× the scene's (%d inertias, %.2f s)", reach.scale,
              reach.factorisations, time.perf_counter() - t)
