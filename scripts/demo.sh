@@ -16,8 +16,8 @@ echo
 echo "== mpirun -n 2 meicp solve data/scenes/two_layers.toml --critical-friction -o out/two_layers"
 $MPIRUN $MEICP solve data/scenes/two_layers.toml --critical-friction -o out/two_layers
 echo
-echo "== mpirun -n 2 meicp solve data/scenes/two_layers_stable.toml --no-output -q"
-$MPIRUN $MEICP solve data/scenes/two_layers_stable.toml --no-output -q
+echo "== mpirun -n 2 meicp solve data/scenes/two_layers_below_mu_c.toml --no-output -q"
+$MPIRUN $MEICP solve data/scenes/two_layers_below_mu_c.toml --no-output -q
 echo
 echo "== seed 002: classify, then solve, the three-node contact LCP"
 $MEICP classify data/lcp/seed002_three_node.dat | tail -n 12

@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 PACKAGES="python3-petsc4py-real python3-slepc4py-real python3-mpi4py python3-h5py-mpi
 python3-numpy python3-scipy python3-matplotlib python3-venv python3-setuptools python3-wheel openmpi-bin
 python3-pytest python3-pytest-mpi python3-pytest-timeout python3-hypothesis python3-siconos
-python3-meshio"
+python3-meshio python3-threadpoolctl"
 
 missing=""
 for p in $PACKAGES; do

@@ -81,7 +81,7 @@ def test_two_layers_unstable_above_and_stable_below_critical_friction():
     unstable = analyze(SCENES / "two_layers.toml")
     assert unstable.stable is False and unstable.modes and unstable.modes[0].sigma > 0
     assert unstable.modes[0].growth_rate == pytest.approx(np.sqrt(unstable.modes[0].sigma))
-    stable = analyze(SCENES / "two_layers_stable.toml")
+    stable = analyze(SCENES / "two_layers_below_mu_c.toml")
     assert stable.divergence is False and "a proof" in stable.evidence
     assert stable.states == ["slip+"] * 5
 

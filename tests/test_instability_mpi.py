@@ -11,7 +11,7 @@ SCENES = ROOT / "data" / "scenes"
 
 @pytest.mark.parametrize("name, method", [("two_layers.toml", "enumerate"),
                                           ("sheared_slip_minus.toml", "active-set"),
-                                          ("two_layers_stable.toml", "auto")])
+                                          ("two_layers_below_mu_c.toml", "auto")])
 def test_same_modes_on_one_and_two_ranks(comm, name, method):
     from meicp import analyze
 

@@ -24,6 +24,7 @@ from contextlib import nullcontext
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.threads import dense_phase
 from ..lattice.assembly import assemble_scipy
 from ..petsc.eigen import solve_ghep
 from ..petsc.inertia import nonnegative_count, pencil_is_negative, rounding_margin
@@ -188,13 +189,16 @@ def schur_error(comm, pieces: PencilPieces, solve_KFF) -> tuple[float, np.ndarra
 
 def on_root(comm, fn):
     """``fn()`` run on rank 0 and its result broadcast; an exception raised there is raised on
-    every rank (no rank left waiting).  Serial: just ``fn()``.  Collective."""
+    every rank (no rank left waiting).  Serial: just ``fn()``.  ``fn`` is a dense phase: its
+    BLAS threads are bounded (:mod:`meicp.core.threads`).  Collective."""
     if comm is None or comm.Get_size() == 1:
-        return fn()
+        with dense_phase():
+            return fn()
     outcome = None
     if comm.Get_rank() == 0:
         try:
-            outcome = (True, fn())
+            with dense_phase():
+                outcome = (True, fn())
         except Exception as exc:  # noqa: BLE001 — re-raised below, on every rank
             outcome = (False, exc)
     ok, value = comm.bcast(outcome, root=0)

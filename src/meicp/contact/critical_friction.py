@@ -29,7 +29,7 @@ from ..scene import Scene
 from .condensation import lift
 from .condenser import Condenser, on_root
 from .divergence import ENUMERATE_J, ENUMERATE_N, enumeration_is_small
-from .maps import grazing_cases, reduced_system
+from .maps import friction_part, grazing_cases, reduced_system
 from .mu_bracket import extend_lower, lower_end, lower_from_mode, upper_candidates
 from .problem import contact_states, pencil_of
 
@@ -285,7 +285,7 @@ def _friction_states(scene):
 
 def _friction_pencil(K, red, sets):
     """``A′ = −P̃₀ K Q̃``, ``B′ = P̃₁ K Q̃`` (sparse CSR) of the σ = 0 EiCP in μ."""
-    P0 = (red.P - _friction_part(red, sets)).tocsr()
+    P0 = (red.P - friction_part(red, sets)).tocsr()
     return reduced_pencil(K, K, P0, red.Q, red.retained, P_B=red.P_friction)
 
 
@@ -387,15 +387,6 @@ def _smallest_mu_condensed(A1, B1, J, mu_max):
         raise ConvergenceError(f"critical_friction: μ_c = {mu:.10g} of the condensed EiCP fails the certificate on "
                                f"the whole reduced lattice (residual {full.residual:.1e})", r)
     return mu, bool(null.shape[1])
-
-
-def _friction_part(red, sets):
-    """μ·P₁ with each contact's own μ (the part of P̃ proportional to friction)."""
-    mus = np.zeros(red.P.shape[0])
-    for k, (name, _, kind) in enumerate(red.pair_of):
-        if kind == "t":
-            mus[red.J[k]] = next(cs.friction for cs in sets if cs.name == name)
-    return sp.diags(mus) @ red.P_friction
 
 
 def _has_mode(scene, sets, model, mu) -> bool:

@@ -21,8 +21,9 @@ Larger ones are decided, cheapest first:
    (:func:`meicp.contact.divergence_proof.prove_no_divergence`), or of ``[0, ∞)`` when no
    σ_max was certified (Lanczos stalls when the top of ``sym(A)`` sits in the cluster of
    slow vibrations of a tall lattice).  Not proved: the search again, with its whole budget.
-5. Otherwise **undecided**, saying what was proved: the window, the supports visited and
-   why each proof stopped.
+5. Otherwise **undecided**, saying what was proved: the window, the supports visited, why
+   each proof stopped, and the friction up to which these contact states are proved free
+   of divergence (:mod:`.friction_range`: the Rayleigh bound along μ).
 
 A verdict is returned with a structured ``proof`` dict (test, statement, sigma_window,
 supports_visited, eigen_solves) besides the evidence sentence.
@@ -43,6 +44,7 @@ from ..petsc.mat import max_abs_entry
 from ..petsc.window import rayleigh_estimate
 from ..scene import Scene
 from .divergence_proof import prove_no_divergence
+from .friction_range import proved_friction_range
 from .problem import Pencil
 from .result import Mode
 
@@ -107,7 +109,7 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     proof = {"test": "", "statement": "", "sigma_window": None, "supports_visited": 0, "eigen_solves": 0}
     t0 = time.perf_counter()
     # 1. Rayleigh bound at 0
-    at_zero = rayleigh_bound(A, B, 0.0)
+    at_zero = rayleigh_bound(A, B, 0.0, decisive=False)
     log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
              time.perf_counter() - t0)
     if at_zero.proved:
@@ -150,7 +152,8 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
         proof["supports_visited"] += int(eicp.coverage.get("supports_visited", 0))
         proof["eigen_solves"] += int(eicp.coverage.get("eigen_solves", 0))
         modes, found, left_out = _modes(eicp, pen, lam_min)
-        log.info("divergence: search from σ = %.6g, %d mode(s) (%.2f s)", top, len(found), time.perf_counter() - t0)
+        log.info("divergence: search from σ = %.6g, %d mode(s), %s Krylov–Schur restart(s) (%.2f s)", top, len(found),
+                 eicp.coverage.get("eps_iterations", "?"), time.perf_counter() - t0)
         if not found:
             return eicp, None
         text = (f"search from the top of the σ-window {window}: a certified divergence mode after "
@@ -190,9 +193,19 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
             return verdict
     stopped.append(f"the search from σ = {top:.6g} over {proof['supports_visited']} support(s) found no mode "
                    f"({eicp.status})")
-    # 5. undecided, with what was established
-    text = "undecided: " + "; ".join(stopped)
-    return [], text, None, eicp, dict(proof, statement=text)
+    # 5. undecided, with what was established: the window, the supports, and the friction up
+    # to which these contact states are proved stable
+    t = time.perf_counter()
+    if at_zero.b_definite:
+        # the first bound spared the inertia that tells "within rounding of 0" (rigid
+        # motions, a borderline μ) from a clear failure; an undecided verdict says which
+        stopped[0] = f"Rayleigh bound at 0: {rayleigh_bound(A, B, 0.0).reason}"
+    reach = proved_friction_range(pen)
+    log.info("divergence: friction range proved up to %.4g× the scene's (%d inertias, %.2f s)", reach.scale,
+             reach.factorisations, time.perf_counter() - t)
+    text = "undecided: " + "; ".join(stopped) + f"; {reach.statement}"
+    return [], text, None, eicp, dict(proof, statement=text, stable_friction_scale=reach.scale,
+                                      stable_friction=dict(reach.friction))
 
 
 def _certified_top(A, B, theta: float, scale: float) -> float | None:
@@ -202,7 +215,7 @@ def _certified_top(A, B, theta: float, scale: float) -> float | None:
         return None
     for k in range(WINDOW_TRIES):
         tau = max(theta, 0.0) * (1.0 + WINDOW_GAP * 4 ** k) + 1e-10 * scale * 4 ** k
-        if rayleigh_bound(A, B, tau).proved:
+        if rayleigh_bound(A, B, tau, decisive=False).proved:
             return tau
     return None
 

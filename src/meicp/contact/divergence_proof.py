@@ -84,7 +84,7 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
         return DivergenceProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()
     if comm is None or comm.Get_size() == 1:
-        out = _decide(cond.at, sigma_max, cond.tau, tol, max_samples)
+        out = on_root(comm, lambda: _decide(cond.at, sigma_max, cond.tau, tol, max_samples))
     else:
         # rank 0 decides; the other ranks serve its condensations until it sends None
         def decide():

@@ -196,3 +196,13 @@ def interface_transform(model, sets: list[ContactSet]) -> sp.csr_matrix | None:
     cols = np.concatenate([2 * lower, 2 * lower + 1])
     E = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
     return (sp.identity(n, format="csr") + E).tocsr()
+
+
+def friction_part(red: ReducedSystem, sets: list[ContactSet]) -> sp.csr_matrix:
+    """μ·P₁: the part of P̃ proportional to friction, with each contact line's own μ
+    (``P̃ − friction_part`` is P̃ at μ = 0)."""
+    mus = np.zeros(red.P.shape[0])
+    for k, (name, _, kind) in enumerate(red.pair_of):
+        if kind == "t":
+            mus[red.J[k]] = next(cs.friction for cs in sets if cs.name == name)
+    return (sp.diags(mus) @ red.P_friction).tocsr()

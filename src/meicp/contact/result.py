@@ -143,7 +143,10 @@ class InstabilityResult(Result):
         ``test`` (``enumerate``, ``rayleigh-inertia``, ``rayleigh-window+condensed-…``,
         ``certified-mode``, or ``""`` when nothing was proved), ``statement``, and for the
         large-problem path ``sigma_window`` (the σ-interval proved free of modes, or None),
-        ``supports_visited``, ``eigen_solves`` (:mod:`meicp.contact.divergence`).
+        ``supports_visited``, ``eigen_solves``; an undecided one also ``stable_friction``
+        (contact line → the μ up to which these states are proved stable) and
+        ``stable_friction_scale`` (that μ over the scene's) (:mod:`meicp.contact.divergence`,
+        :mod:`meicp.contact.friction_range`).
     eicp: the raw :class:`~meicp.eicp.problem.EiCPResult` of each MEiCP solved, one per
         grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
         case with every DOF held: nothing to solve); empty when no MEiCP was reached.

@@ -21,7 +21,7 @@ from .errors import MeicpError
 DEBIAN_PACKAGES = {
     "numpy": "python3-numpy", "scipy": "python3-scipy", "mpi4py": "python3-mpi4py",
     "petsc4py": "python3-petsc4py-real", "slepc4py": "python3-slepc4py-real",
-    "h5py": "python3-h5py-mpi", "matplotlib": "python3-matplotlib",
+    "h5py": "python3-h5py-mpi", "matplotlib": "python3-matplotlib", "threadpoolctl": "python3-threadpoolctl",
 }
 
 SETUP_ADVICE = (

@@ -47,6 +47,7 @@ from scipy.optimize import linprog
 
 from ..core.errors import ProblemError
 from ..core.progress import Progress
+from ..core.threads import dense_phase
 from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certificate_parts, lam_floor
 from .scaling import PencilScaling, refine_pair
@@ -397,12 +398,13 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     progress = Progress("enumeration" + (f" (rank 0's share on {size} ranks)" if size > 1 else ""),
                         total=sum(share), unit="supports", work=sum(cost))
     done, work = 0, 0.0
-    for k in range(J.size + 1):
-        for chunk in _batches(_combinations(J, k, rank, size), BATCH):
-            e.run_stack(chunk)
-            done += len(chunk)
-            work += len(chunk) * float(problem.F.size + k)
-            progress.update(done, work, f"support size {k} of {J.size}, {len(e.rows)} solution(s) so far")
+    with dense_phase():
+        for k in range(J.size + 1):
+            for chunk in _batches(_combinations(J, k, rank, size), BATCH):
+                e.run_stack(chunk)
+                done += len(chunk)
+                work += len(chunk) * float(problem.F.size + k)
+                progress.update(done, work, f"support size {k} of {J.size}, {len(e.rows)} solution(s) so far")
     lams, X, W, masks, res = e.arrays()
     counts = np.array([e.eigen_solves, e.slow_path, e.unverified, e.out_of_range, e.infinite, e.refined,
                        e.second_pass, e.unsolved])

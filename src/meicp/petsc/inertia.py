@@ -89,13 +89,16 @@ def pencil_is_negative(A, B) -> SignProof | None:
     return _negative_with_margin(A, B, "A")
 
 
-def rayleigh_bound(A, B, tau: float = 0.0) -> SignProof:
+def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True) -> SignProof:
     """Whether ``sym(A) − τ·sym(B) ≺ 0`` with ``sym(B) ≻ 0``, both with a margin above rounding.
 
     For every MEiCP solution (x real, xᵀw = 0) ``σ·xᵀBx = xᵀAx``, i.e.
     ``σ = xᵀsym(A)x / xᵀsym(B)x``: proved, no solution has σ ≥ τ (τ = 0: no divergence mode
     at all).  Holds for a nonsymmetric pencil, a frictional interface's non-diagonal B
-    included.  A, B: SciPy or PETSc (collective)."""
+    included.  A, B: SciPy or PETSc (collective).  ``decisive=False`` spares the second
+    factorisation that tells a borderline case (None) from a clear failure (False): a caller
+    that only acts on ``proved is True`` gets False for both, with ``above`` the eigenvalues
+    not proved below the margin."""
     SA, SB = symmetric_part(A), symmetric_part(B)
     try:
         if tau != 0.0:
@@ -104,14 +107,14 @@ def rayleigh_bound(A, B, tau: float = 0.0) -> SignProof:
                 SA.axpy(-float(tau), SB, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             else:
                 SA = (SA - float(tau) * SB).tocsr()
-        return _negative_with_margin(SA, SB, "sym(A)" if tau == 0.0 else f"sym(A) − {tau:.6g}·sym(B)")
+        return _negative_with_margin(SA, SB, "sym(A)" if tau == 0.0 else f"sym(A) − {tau:.6g}·sym(B)", decisive)
     finally:
         for M in (SA, SB):
             if is_petsc_mat(M):
                 M.destroy()
 
 
-def _negative_with_margin(A, B, name: str) -> SignProof:
+def _negative_with_margin(A, B, name: str, decisive: bool = True) -> SignProof:
     b_ok, b_text = _positive_definite(B)
     if not b_ok:
         return SignProof(False, b_text, 0.0, b_definite=False)
@@ -120,6 +123,9 @@ def _negative_with_margin(A, B, name: str) -> SignProof:
     if above == 0:
         return SignProof(True, f"{name} + η·diag|·| is negative definite (η = {eta:.1e}, above rounding) and "
                                f"{b_text}", eta)
+    if not decisive:
+        return SignProof(False, f"{name} + η·diag|·| is not negative definite ({above} eigenvalue(s) of the diagonally "
+                                f"scaled {name} ≥ −η, η = {eta:.1e}): the bound excludes nothing", eta, above)
     clearly = nonnegative_count(A, -eta)       # ... ≥ +η
     if clearly == 0:
         return SignProof(None, f"{above} eigenvalue(s) of {name} lie within rounding of 0 ({name} − η·diag|·| is "

@@ -183,6 +183,17 @@ def symmetric_part(M):
     return S
 
 
+def combination(X, alpha: float, Y):
+    """``X + α·Y`` as a new matrix: SciPy in, SciPy out; PETSc Mats in, a new PETSc Mat out
+    (collective; the caller destroys it)."""
+    if not is_petsc_mat(X):
+        return (X + float(alpha) * Y).tocsr()
+    PETSc = import_petsc()
+    S = X.duplicate(copy=True)
+    S.axpy(float(alpha), Y, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    return S
+
+
 @contextmanager
 def destroying(*objects):
     """``with destroying(K, M) as (K, M):`` — the objects, and on exit ``destroy()`` (collective)
