@@ -115,6 +115,17 @@ def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True) -> SignProo
                 M.destroy()
 
 
+def symmetric_part_definite(B) -> tuple[bool, str]:
+    """Whether ``sym(B) ≻ 0`` (exactly for a diagonal B, else by an LDLᵀ inertia with a
+    margin above rounding) and the sentence saying how.  SciPy or PETSc (collective)."""
+    SB = symmetric_part(B)
+    try:
+        return _positive_definite(SB)
+    finally:
+        if is_petsc_mat(SB):
+            SB.destroy()
+
+
 def _negative_with_margin(A, B, name: str, decisive: bool = True) -> SignProof:
     b_ok, b_text = _positive_definite(B)
     if not b_ok:

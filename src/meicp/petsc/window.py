@@ -30,7 +30,7 @@ ESTIMATE_TOL = 1e-5
 def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = ESTIMATE_TOL,
                       options: dict | None = None) -> tuple[float, bool, int]:
     """``(θ, converged, restarts)``: θ the largest Ritz value of ``(sym A, sym B)`` seen (a
-    lower estimate of λ_max; exact to ``tol`` when ``converged``; nan when SLEPc fails).  A, B: SciPy (solved on
+    lower estimate of λ_max; its residual below ``tol`` when ``converged``; nan when SLEPc fails).  A, B: SciPy (solved on
     this process) or PETSc Mats."""
     PETSc, SLEPc = import_petsc(), import_slepc()
     SA, SB = symmetric_part(A), symmetric_part(B)
