@@ -5,7 +5,8 @@ backward errors and the backward error recomputed on (A, B) for both halves of t
     mpirun -n 2 .venv/bin/python scripts/diagnose_flutter_shift.py DOFS TOL[,TOL...] [option=value ...]
 
 e.g. ``300000 1e-10,1e-12`` or ``300000 1e-10 st_mat_mumps_icntl_10=-2`` (options under the
-``meicp_flutter_`` prefix, without it).  Findings in docs/benchmarks.md, Flutter."""
+``meicp_flutter_`` prefix, without it); ``shift=0.1j`` moves the target off the proxy's σ by
+that complex offset.  Findings in docs/benchmarks.md, Flutter."""
 import sys, time
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -21,11 +22,12 @@ from meicp.petsc.options import FLUTTER, OptionsScope
 comm = MPI.COMM_WORLD
 dofs = int(sys.argv[1]); tols = [float(t) for t in sys.argv[2].split(",")]
 extra = dict(a.split("=") for a in sys.argv[3:])
+offset = complex(extra.pop("shift", "0"))
 scene = scene_of(dofs)
 SLEPc = import_slepc()
 with pencil(scene, comm=comm) as pen:
     base = next(cs.states for cs in pen.sets if cs.name == "base")
-    tau = complex(fl.proxy_targets(scene, list(base), 1)[0])
+    tau = complex(fl.proxy_targets(scene, list(base), 1)[0]) + offset
     if comm.rank == 0: print("tau", tau, flush=True)
     with SlidingPencilOps(pen.A, pen.B) as ops:
         n = pen.A.getSize()[0]

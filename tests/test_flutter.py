@@ -218,6 +218,34 @@ def test_search_without_a_mode_never_says_no_flutter():
     assert r.flutter is None and not r.modes and "not a proof" in r.evidence
 
 
+def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeypatch):
+    """At 3·10⁵ DOFs the proxy's target sits in a cluster of ill-conditioned eigenvalues and
+    every pair fails the gate; the search then retries above it.  Here the first solve's
+    pairs are made to fail (residual 1): the retry must certify one of QZ's modes."""
+    real = fl.complex_shift_solve
+    calls = []
+
+    def first_fails(ops, tau, **kw):
+        pairs, info = real(ops, tau, **kw)
+        calls.append(tau)
+        return ([(s, x, 1.0) for s, x, _ in pairs] if len(calls) == 1 else pairs), info
+
+    monkeypatch.setattr(fl, "complex_shift_solve", first_fails)
+    scene = lattice(32, (8, 8), 2.0)
+    with pencil(scene) as pen:
+        ref = fl.pencil_flutter(pen, scene)
+        tau = complex(fl.proxy_targets(scene, ["slip+"] * 32, 1)[0])
+        got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
+        calls.clear()
+        none = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12, off_cluster_tries=0)
+    assert len(calls) == 1 and none.flutter is None and not none.modes
+    assert got.counts["moved"] == 1 and "moved off it" in got.evidence
+    assert got.flutter is True and got.modes
+    assert all(m[4] == f"shift-invert at τ = {fl.off_cluster(tau, 0):.6g}" for m in got.modes)
+    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert fl.off_cluster(tau, 0).imag > tau.imag and fl.off_cluster(tau, 1).imag > fl.off_cluster(tau, 0).imag
+
+
 @pytest.mark.mpi(min_size=2)
 def test_same_flutter_modes_on_two_ranks(comm):
     from mpi4py import MPI

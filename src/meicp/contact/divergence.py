@@ -7,7 +7,9 @@ Larger ones are decided, cheapest first:
 1. **Rayleigh bound at 0** — complementarity gives ``xᵀw = 0``, so every solution has
    ``σ = xᵀsym(A)x / xᵀsym(B)x``: ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` (LDLᵀ inertias with a
    margin above rounding, :func:`meicp.petsc.inertia.rayleigh_bound`) proves that no σ ≥ 0
-   exists.  One factorisation; it holds for any pencil, interfaces included.
+   exists.  One factorisation; it holds for any pencil, interfaces included.  Not tried
+   when the Lanczos estimate of step 2, made first, has a Ritz value θ > 0: θ is itself a
+   Rayleigh quotient, so sym(A) is not negative definite.
 2. **The σ-window** ``[0, σ_max]``: ``σ_max`` placed by Lanczos on ``(sym A, sym B)``
    (:func:`meicp.petsc.window.rayleigh_estimate`) and certified by the same bound at
    ``τ = σ_max`` (no solution above it).  It also bounds the real part of every eigenvalue
@@ -39,7 +41,7 @@ import numpy as np
 
 from ..eicp.problem import lam_floor
 from ..eicp.solve import solve_eicp
-from ..petsc.inertia import rayleigh_bound
+from ..petsc.inertia import rayleigh_bound, symmetric_part_definite
 from ..petsc.mat import max_abs_entry
 from ..petsc.window import rayleigh_estimate
 from ..scene import Scene
@@ -53,15 +55,20 @@ from .result import Mode
 ENUMERATE_FLOPS = 2e9
 ENUMERATE_N = 600
 ENUMERATE_J = 16
+#: a Ritz value of (sym A, sym B) above this multiple of max|A|/max|B| is positive beyond
+#: rounding: the Rayleigh bound at 0 is then not tried
+RITZ_POSITIVE = 1e-8
 #: σ_max candidates tried above the Lanczos estimate θ: τ = θ⁺·(1 + GAP·4^k) + floor
 WINDOW_GAP = 1e-3
 WINDOW_TRIES = 3
 #: support updates of the first, short search from the window's top (before the proof), and
 #: the Krylov–Schur restarts each of its eigen-solves may take: a rightmost eigenvalue that is
-#: a mode stands apart and converges in a few; one inside the cluster of slow vibrations
-#: took 273 s at 10⁶ DOFs and was no mode
+#: a mode stands apart and converges in a few (3 to 5 on the two-layer family from 24,000 to
+#: 10⁶ DOFs; near μ_c one took 10 and others 22 to 51, found by the full search after the
+#: proof stopped); one inside the cluster of slow vibrations took 273 s at 10⁶ DOFs and was
+#: no mode, and a stable lattice spends the whole budget here
 FIRST_SEARCH = 3
-FIRST_EPS_MAX_IT = 10
+FIRST_EPS_MAX_IT = 6
 
 log = logging.getLogger("meicp")
 
@@ -108,23 +115,31 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     A, B, red = pen.A, pen.B, pen.maps
     proof = {"test": "", "statement": "", "sigma_window": None, "supports_visited": 0, "eigen_solves": 0}
     t0 = time.perf_counter()
-    # 1. Rayleigh bound at 0
-    at_zero = rayleigh_bound(A, B, 0.0, decisive=False)
-    log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
-             time.perf_counter() - t0)
-    if at_zero.proved:
-        text = (f"Rayleigh bound (LDLᵀ inertia): {at_zero.reason}; every MEiCP solution has σ = xᵀsym(A)x / xᵀsym(B)x < 0 "
-                "(a proof)")
-        return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text, sigma_window=(0.0, math.inf))
-    stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
-    # 2. the σ-window
-    petsc_options = dict(scene.petsc)
-    # its options: -meicp_window_* on the command line; without sym(B) ≻ 0 (a frictional
+    # 1. the top of the Rayleigh quotient (σ-window estimate) first: a Ritz value θ > 0 of
+    # (sym A, sym B) is a Rayleigh quotient, so sym(A) is not negative definite and the bound
+    # at 0 — one LDLᵀ of the whole pencil, 7 s at 10⁶ DOFs — cannot prove anything.  Its
+    # options: -meicp_window_* on the command line; without sym(B) ≻ 0 (a frictional
     # interface at large μ) no Rayleigh quotient bounds σ and Lanczos would break down
-    theta, converged = (rayleigh_estimate(A, B)[:2] if at_zero.b_definite else (math.nan, False))
+    petsc_options = dict(scene.petsc)
+    b_definite, _ = symmetric_part_definite(B)
+    theta, converged = (rayleigh_estimate(A, B)[:2] if b_definite else (math.nan, False))
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
+    # 2. the Rayleigh bound at 0, unless θ already rules it out
+    if theta > RITZ_POSITIVE * scale:
+        stopped = [f"Rayleigh bound at 0: not tried, the Ritz value θ = {theta:.6g} > 0 of (sym A, sym B) is a "
+                   "Rayleigh quotient: sym(A) is not negative definite"]
+    else:
+        at_zero = rayleigh_bound(A, B, 0.0, decisive=False)
+        log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
+                 time.perf_counter() - t0)
+        if at_zero.proved:
+            text = (f"Rayleigh bound (LDLᵀ inertia): {at_zero.reason}; every MEiCP solution has σ = "
+                    "xᵀsym(A)x / xᵀsym(B)x < 0 (a proof)")
+            return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text,
+                                              sigma_window=(0.0, math.inf))
+        stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
     # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
-    sigma_max = _certified_top(A, B, theta, scale) if converged or not at_zero.above else None
+    sigma_max = _certified_top(A, B, theta, scale) if converged else None
     log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
              time.perf_counter() - t0)
     if sigma_max is None:
@@ -196,8 +211,8 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     # 5. undecided, with what was established: the window, the supports, and the friction up
     # to which these contact states are proved stable
     t = time.perf_counter()
-    if at_zero.b_definite:
-        # the first bound spared the inertia that tells "within rounding of 0" (rigid
+    if b_definite:
+        # the first bound (when tried) spared the inertia that tells "within rounding of 0" (rigid
         # motions, a borderline μ) from a clear failure; an undecided verdict says which
         stopped[0] = f"Rayleigh bound at 0: {rayleigh_bound(A, B, 0.0).reason}"
     reach = proved_friction_range(pen)

@@ -76,6 +76,13 @@ PROXY_NEAR_ROWS = 3
 SEARCH_BYTES_PER_DOF = 10_000
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
+#: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
+#: flutter eigenvalues (shift-and-invert then returns pseudo-pairs next to it: 3·10⁵ DOFs,
+#: |σ − τ| ≤ 1e-4, backward errors 1e-10 … 1e-6); it is moved up off the cluster by
+#: OFF_CLUSTER·max(Im τ, 0.05|τ|) per try, at most OFF_CLUSTER_TRIES times (there: +0.05i
+#: still inside, +0.155i certified the cluster's top edge, backward error 2e-14)
+OFF_CLUSTER = 0.5
+OFF_CLUSTER_TRIES = 1
 
 
 @dataclass
@@ -221,12 +228,20 @@ def lambda_line_targets(growth: float, frequencies) -> list[complex]:
     return [complex((growth + 1j * w) ** 2) for w in frequencies]
 
 
+def off_cluster(tau: complex, attempt: int) -> complex:
+    """The target tried after ``attempt`` + 1 failed ones at ``tau``: moved up, away from the
+    real axis, by OFF_CLUSTER·max(Im τ, 0.05|τ|)·2^attempt (the fastest flutter modes of a
+    cluster are those of largest Im σ, on its top edge)."""
+    return tau + 1j * OFF_CLUSTER * max(tau.imag, 0.05 * abs(tau)) * 2 ** attempt
+
+
 def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int | None = SEARCH_NCV,
                    tol: float = 1e-12, residual_tol: float = RESIDUAL_TOL, options: dict | None = None,
-                   why_targets: str = "") -> PencilFlutter:
+                   why_targets: str = "", off_cluster_tries: int = OFF_CLUSTER_TRIES) -> PencilFlutter:
     """Flutter modes of (A, B) (PETSc Mats, or SciPy distributed here over ``comm``) near the
     complex ``targets``: True with certified modes, else None — never a proof of absence.
-    Collective."""
+    A target whose converged pairs all fail the residual gate is retried off the cluster
+    (:func:`off_cluster`), at most ``off_cluster_tries`` times.  Collective."""
     own = not is_petsc_mat(A)
     if own:
         comm = mpi_comm(comm)
@@ -237,22 +252,29 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                 return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
                                                      "a proof")
             bound = ops.skew_bound()
-            modes, rejected, disks, borderline = [], [], [], 0
+            modes, rejected, disks, borderline, moved = [], [], [], 0, []
             for tau in targets:
                 tau = complex(tau)
                 tau = tau.conjugate() if tau.imag < 0 else tau
-                pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, options=options)
-                passed = sum(res <= residual_tol for _, _, res in pairs)
-                disks.append((tau, info["radius"], len(pairs), passed))
-                for sigma, x, res in pairs:
-                    margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
-                    if res > residual_tol:
-                        rejected.append((sigma, res))
-                    elif abs(sigma.imag) > margin:
-                        if not any(abs(sigma - m[0]) <= SAME * abs(m[0]) for m in modes):
-                            modes.append((sigma, _normalise(x), res, margin, f"shift-invert at τ = {tau:.6g}"))
-                    elif sigma.imag != 0:
-                        borderline += 1
+                for attempt in range(off_cluster_tries + 1):
+                    pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, options=options)
+                    passed = sum(res <= residual_tol for _, _, res in pairs)
+                    disks.append((tau, info["radius"], len(pairs), passed))
+                    for sigma, x, res in pairs:
+                        margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
+                        if res > residual_tol:
+                            rejected.append((sigma, res))
+                        elif abs(sigma.imag) > margin:
+                            if not any(abs(sigma - m[0]) <= SAME * abs(m[0]) for m in modes):
+                                modes.append((sigma, _normalise(x), res, margin, f"shift-invert at τ = {tau:.6g}"))
+                        elif sigma.imag != 0:
+                            borderline += 1
+                    if passed or not pairs or attempt == off_cluster_tries:
+                        break
+                    moved.append((tau, off_cluster(tau, attempt)))
+                    log.info("flutter: every pair at τ = %.6g failed the residual gate; retrying off the cluster at "
+                             "τ = %.6g", tau, moved[-1][1])
+                    tau = moved[-1][1]
     finally:
         if own:
             A.destroy()
@@ -261,7 +283,11 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                         counts={"targets": len(disks), "rejected": len(rejected), "borderline": borderline})
     text = "; ".join(f"|σ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} σ, {p} passing the residual gate)"
                      for t, r, k, p in disks)
-    out.evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}: the eigenvalues SLEPc "
+    off = "".join(f"; every pair near τ = {a.real:.4g}{a.imag:+.4g}i failed the residual gate (a cluster of "
+                  f"ill-conditioned eigenvalues: shift-and-invert returns pseudo-pairs there), so the target moved off "
+                  f"it to {b.real:.4g}{b.imag:+.4g}i" for a, b in moved)
+    out.counts["moved"] = len(moved)
+    out.evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}{off}: the eigenvalues SLEPc "
                     f"converged in {text}"
                     + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
                     + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else ""))

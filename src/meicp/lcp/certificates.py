@@ -94,6 +94,19 @@ def pd_certificate(G: np.ndarray, error: float, d: np.ndarray | None = None, *, 
     return PDCertificate(float(w[0]), eig_rounding(X, norm) + dn * error + tol * norm, d, V[:, 0])
 
 
+def below_allowance(X: np.ndarray, allowance: float) -> bool:
+    """Whether the Cholesky factorisation of ``sym(X) − allowance·I`` breaks down: λ_min(sym X)
+    then lies below the allowance (up to the factorisation's rounding), so a
+    :func:`pd_certificate` with that allowance would not prove ``X ≻ 0``.  A cheap rejection
+    (a Cholesky costs a fraction of the eigenvalue it spares); ``False`` proves nothing."""
+    Y = sym(X) - allowance * np.eye(X.shape[0])
+    try:
+        sl.cholesky(Y, lower=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return True
+    return False
+
+
 def optimise_scaling(Gs: list[np.ndarray], d0: np.ndarray | None = None, iters: int = 60,
                      step: float = 0.5, target: float | None = None) -> tuple[np.ndarray, float]:
     """A positive diagonal d maximising ``min_i λ_min(sym(D G_i)) / mean(d)`` (λ_min of a

@@ -51,18 +51,25 @@ def ghep_defaults(nev: int, target: float) -> dict:
 
 
 def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = GHEP,
-               options: dict | None = None) -> EigenPairs:
+               options: dict | None = None, ksp=None) -> EigenPairs:
     """The ``nev`` eigenpairs of the symmetric-definite pencil (A, B) nearest ``target``.
 
     ``options`` (e.g. a scene's ``[petsc]`` table, keys without the prefix) override the
-    code defaults; command-line options override both.  Collective.  Raises
-    :class:`ConvergenceError` if fewer than ``nev`` pairs converge.
+    code defaults; command-line options override both.  ``ksp``: a KSP already set up with
+    a MUMPS Cholesky factor of A itself (``target`` 0), which the spectral transformation
+    then reuses instead of factoring A again (its operator is A unchanged, so PETSc keeps
+    the factor).  Collective.  Raises :class:`ConvergenceError` if fewer than ``nev`` pairs
+    converge.
     """
+    if ksp is not None and target != 0.0:
+        raise ValueError("a given KSP holds the factor of A: the target must be 0")
     PETSc = import_petsc()
     SLEPc = import_slepc()
     eps = SLEPc.EPS().create(comm=A.getComm())
     try:
         eps.setOperators(A, B)
+        if ksp is not None:
+            eps.getST().setKSP(ksp)
         with OptionsScope(prefix, ghep_defaults(nev, target), options) as scope:
             scope.configure(eps)
             eps.solve()
@@ -82,5 +89,10 @@ def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = GHEP,
                 f"(reason {eps.getConvergedReason()})", result)
         return result
     finally:
+        if ksp is not None:
+            # destroying the EPS resets its ST's KSP, which would free the caller's factor
+            detached = PETSc.KSP().create(comm=A.getComm())
+            eps.getST().setKSP(detached)
+            detached.destroy()
         eps.destroy()
         PETSc.garbage_cleanup() if hasattr(PETSc, "garbage_cleanup") else None

@@ -1,0 +1,127 @@
+"""The small records stored beside a result (:mod:`meicp.io.results`): the versions of the
+software, the critical friction as a record, and the scene as TOML text (the file's own text
+when known, else regenerated from the parsed scene by :func:`scene_to_toml`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import platform
+from pathlib import Path
+
+import numpy as np
+import scipy
+
+from .. import __version__
+from ..info import collect
+from ..scene import Scene
+
+
+def versions() -> dict:
+    """Versions worth recording next to a result (:func:`meicp.info.collect` when PETSc is
+    importable, else the pure-Python part).  Values are strings or numbers."""
+    out = {"meicp": __version__, "python": platform.python_version(), "numpy": np.__version__,
+           "scipy": scipy.__version__}
+    try:
+        out.update(collect())
+    except Exception as exc:  # noqa: BLE001 - versions are informative, never fatal
+        out["petsc"] = f"unavailable ({type(exc).__name__}: {exc})"
+    try:
+        import matplotlib
+
+        out["matplotlib"] = matplotlib.__version__
+    except ImportError:  # pragma: no cover
+        pass
+    return {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in out.items()}
+
+
+def critical_friction_record(mu, evidence: str | None = None) -> dict:
+    """The critical friction as results.h5 and ``meicp solve --json`` store it: ``value``
+    (inf when no μ up to the search's bound gives a mode), ``found``, and ``lower``,
+    ``upper``, ``exact``, ``evidence`` as far as the number carries them (a float subclass
+    with a certified bracket); ``evidence`` stands in when it carries none.  Unknown: None."""
+    value = float(mu)
+    record = {"value": value, "found": math.isfinite(value)}
+    for name in ("lower", "upper", "exact", "evidence"):
+        item = getattr(mu, name, None)
+        record[name] = float(item) if isinstance(item, (float, np.floating)) else item
+    if record["evidence"] is None:
+        record["evidence"] = evidence
+    return record
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def _fields(obj, skip=()) -> list:
+    """(key, value) of a scene dataclass, in declaration order: scene.py names every field
+    after its TOML key, so new keys are written without changes here."""
+    return [(f.name, getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.name not in skip]
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """A TOML text that :func:`~meicp.io.scene.loads_scene` reads back to an equal scene
+    (``source`` aside): the record of a scene built in code, with no file behind it."""
+    lines = []
+
+    def table(header, items):
+        lines.append("")
+        lines.append(header)
+        for key, value in items:
+            if value is not None:
+                lines.append(f"{key} = {_toml_value(value)}")
+
+    if scene.title:
+        lines.append(f"title = {_toml_value(scene.title)}")
+    table("[lattice]", _fields(scene.lattice))
+    for layer in scene.layers:
+        table("[[layers]]", _fields(layer))
+    for e in scene.embedded:
+        table("[[embedded]]", _fields(e))
+    table("[boundary]", _fields(scene.boundary))
+    for itf in scene.interfaces:
+        if not itf.declared:
+            continue
+        if itf.bonded:
+            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind), ("stiffness", itf.stiffness)])
+        else:
+            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind),
+                                     ("friction", itf.friction), ("states", itf.states)])
+    if scene.contact is not None:
+        table("[contact]", _fields(scene.contact))
+    if scene.load is not None:
+        table("[load]", _fields(scene.load))
+    table("[solver]", _fields(scene.solver))
+    if len(scene.petsc):
+        lines.append("")
+        lines.append("[petsc]")
+        for key, value in scene.petsc.items():
+            lines.append(f"{json.dumps(key)} = {_toml_value(value)}")
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _scene_text(scene: Scene, scene_text):
+    if scene_text:
+        return scene_text
+    if scene.source and os.path.isfile(scene.source):
+        try:
+            text = Path(scene.source).read_text(encoding="utf-8")
+            if text:
+                return text
+        except OSError:
+            pass
+    return scene_to_toml(scene)
