@@ -51,7 +51,7 @@ def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monke
     Lanczos returns an unconverged Ritz value below it) no σ_max is certified; the condensed
     proof then covers [0, ∞) — and proves nothing where a mode exists (the search from 0
     misses the mode without the window's top: undecided, never stable)."""
-    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B: (-1.0, False, 60))
+    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B, **kw: (-1.0, False, 60))
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
     assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
     assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "[0, inf]" in r.evidence
@@ -90,7 +90,7 @@ def test_without_a_window_the_proof_on_every_sigma_never_contradicts_enumeration
                                                                                  state, shear, mu):
     """Lanczos made to stall (no σ_max certified): the condensed proof on [0, ∞) and the
     search from 0 never claim what enumeration contradicts."""
-    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B: (-1.0, False, 60))
+    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B, **kw: (-1.0, False, 60))
     scene = _scene(nx, (lower, upper), state, mu, shear)
     truth = meicp.analyze(scene, method="enumerate", flutter=False)
     window = meicp.analyze(scene, method="active-set", flutter=False)

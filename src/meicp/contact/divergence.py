@@ -8,8 +8,8 @@ Larger ones are decided, cheapest first:
    ``σ = xᵀsym(A)x / xᵀsym(B)x``: ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` (LDLᵀ inertias with a
    margin above rounding, :func:`meicp.petsc.inertia.rayleigh_bound`) proves that no σ ≥ 0
    exists.  One factorisation; it holds for any pencil, interfaces included.  Not tried
-   when the Lanczos estimate of step 2, made first, has a Ritz value θ > 0: θ is itself a
-   Rayleigh quotient, so sym(A) is not negative definite.
+   when a short Lanczos run of step 2's estimate, made first, has a Ritz value θ > 0: θ is
+   itself a Rayleigh quotient, so sym(A) is not negative definite.
 2. **The σ-window** ``[0, σ_max]``: ``σ_max`` placed by Lanczos on ``(sym A, sym B)``
    (:func:`meicp.petsc.window.rayleigh_estimate`) and certified by the same bound at
    ``τ = σ_max`` (no solution above it).  It also bounds the real part of every eigenvalue
@@ -58,6 +58,9 @@ ENUMERATE_J = 16
 #: a Ritz value of (sym A, sym B) above this multiple of max|A|/max|B| is positive beyond
 #: rounding: the Rayleigh bound at 0 is then not tried
 RITZ_POSITIVE = 1e-8
+#: Lanczos restarts of the short run that decides whether the Rayleigh bound at 0 is tried
+#: (an isolated positive top shows a positive Ritz value within a few restarts)
+PROBE_RESTARTS = 5
 #: σ_max candidates tried above the Lanczos estimate θ: τ = θ⁺·(1 + GAP·4^k) + floor
 WINDOW_GAP = 1e-3
 WINDOW_TRIES = 3
@@ -120,9 +123,12 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     # at 0 — one LDLᵀ of the whole pencil, 7 s at 10⁶ DOFs — cannot prove anything.  Its
     # options: -meicp_window_* on the command line; without sym(B) ≻ 0 (a frictional
     # interface at large μ) no Rayleigh quotient bounds σ and Lanczos would break down
+    # A short Lanczos run decides the order: where sym(A) ≺ 0 its top sits among the slow
+    # vibrations just below 0 and a full run stalls for its whole budget (6.5 s at 10⁶ DOFs,
+    # μ = 0.01) before the bound proves stability anyway.
     petsc_options = dict(scene.petsc)
     b_definite, _ = symmetric_part_definite(B)
-    theta, converged = (rayleigh_estimate(A, B)[:2] if b_definite else (math.nan, False))
+    theta, converged = (rayleigh_estimate(A, B, max_it=PROBE_RESTARTS)[:2] if b_definite else (math.nan, False))
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
     # 2. the Rayleigh bound at 0, unless θ already rules it out
     if theta > RITZ_POSITIVE * scale:
@@ -138,6 +144,8 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
             return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text,
                                               sigma_window=(0.0, math.inf))
         stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
+    if b_definite and not converged:
+        theta, converged = rayleigh_estimate(A, B)[:2]
     # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
     sigma_max = _certified_top(A, B, theta, scale) if converged else None
     log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",

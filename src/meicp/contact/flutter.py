@@ -283,8 +283,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                         counts={"targets": len(disks), "rejected": len(rejected), "borderline": borderline})
     text = "; ".join(f"|σ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} σ, {p} passing the residual gate)"
                      for t, r, k, p in disks)
-    off = "".join(f"; every pair near τ = {a.real:.4g}{a.imag:+.4g}i failed the residual gate (a cluster of "
-                  f"ill-conditioned eigenvalues: shift-and-invert returns pseudo-pairs there), so the target moved off "
+    off = "".join(f"; every pair near τ = {a.real:.4g}{a.imag:+.4g}i failed the residual gate (pseudo-pairs, as "
+                  f"shift-and-invert returns inside a cluster of ill-conditioned eigenvalues), so the target moved off "
                   f"it to {b.real:.4g}{b.imag:+.4g}i" for a, b in moved)
     out.counts["moved"] = len(moved)
     out.evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}{off}: the eigenvalues SLEPc "
