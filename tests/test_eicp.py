@@ -190,6 +190,12 @@ def test_cli_eicp(tmp_path):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert sorted(s["lam"] for s in data["solutions"]) == pytest.approx([-(3 + 5 ** 0.5) / 2, -2, -1])
+    assert data["attempts"] == []  # --all runs the enumeration itself, not auto's portfolio
+    # auto records the method(s) it ran, as `meicp lcp --json` does
+    out = run(meicp_cmd() + ["eicp", str(tmp_path / "p.h5"), "--json"])
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["attempts"] and data["attempts"][-1][:2] == [data["method"], data["status"]]
     write_hdf5_problem(tmp_path / "bad.h5", A=np.eye(2))
     out = run(meicp_cmd() + ["eicp", str(tmp_path / "bad.h5")])
     assert out.returncode == 2 and "no dataset 'B'" in out.stderr

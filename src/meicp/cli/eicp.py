@@ -39,10 +39,14 @@ def run(args) -> int:
             "file": args.file, "method": r.method, "status": r.status, "success": r.success,
             "message": cli_spelling(r.message), "iterations": r.iterations, "timings": r.timings,
             "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
-                           "x": s.x.tolist()} for s in r.solutions]}, indent=2))
+                           "x": s.x.tolist()} for s in r.solutions],
+            "attempts": [[name, status, cli_spelling(message)] for name, status, message in r.attempts]},
+            indent=2))
         return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED
     n = np.shape(data["A"])[0]
     rank0_print(f"EiCP from {args.file}: n = {n}, |J| = {n if J is None else J.size}")
+    for name, status, message in (r.attempts if len(r.attempts) > 1 else []):
+        rank0_print(f"  tried {name}: {status}" + (f" ({cli_spelling(message)})" if message and status != "solved" else ""))
     rank0_print(cli_spelling(r.summary()))
     if r.solutions:
         rank0_print(f"{'λ':>22}  {'residual':>9}  {'|support|':>9}  support")
