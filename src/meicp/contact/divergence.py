@@ -118,14 +118,13 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
     A, B, red = pen.A, pen.B, pen.maps
     proof = {"test": "", "statement": "", "sigma_window": None, "supports_visited": 0, "eigen_solves": 0}
     t0 = time.perf_counter()
-    # 1. the top of the Rayleigh quotient (σ-window estimate) first: a Ritz value θ > 0 of
-    # (sym A, sym B) is a Rayleigh quotient, so sym(A) is not negative definite and the bound
-    # at 0 — one LDLᵀ of the whole pencil, 7 s at 10⁶ DOFs — cannot prove anything.  Its
-    # options: -meicp_window_* on the command line; without sym(B) ≻ 0 (a frictional
-    # interface at large μ) no Rayleigh quotient bounds σ and Lanczos would break down
-    # A short Lanczos run decides the order: where sym(A) ≺ 0 its top sits among the slow
-    # vibrations just below 0 and a full run stalls for its whole budget (6.5 s at 10⁶ DOFs,
-    # μ = 0.01) before the bound proves stability anyway.
+    # 1. a short Lanczos run on (sym A, sym B) first: a Ritz value θ > 0 is a Rayleigh quotient,
+    # so sym(A) is not negative definite and the bound at 0 — one LDLᵀ of the whole pencil, 7 s
+    # at 10⁶ DOFs — cannot prove anything.  Short, because where sym(A) ≺ 0 the top sits among
+    # the slow vibrations just below 0 and a full run stalls for its whole budget (6.5 s at 10⁶
+    # DOFs, μ = 0.01) before the bound proves stability anyway.  Its options: -meicp_window_*
+    # on the command line; without sym(B) ≻ 0 (a frictional interface at large μ) no Rayleigh
+    # quotient bounds σ and Lanczos would break down
     petsc_options = dict(scene.petsc)
     b_definite, _ = symmetric_part_definite(B)
     theta, converged = (rayleigh_estimate(A, B, max_it=PROBE_RESTARTS)[:2] if b_definite else (math.nan, False))
