@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..lcp.certificates import below_allowance, eig_rounding, norm2_bound, optimise_scaling, pd_certificate, scaled
+from ..lcp.certificates import optimise_scaling, pd_certificate, pd_margin, scaled
 
 
 def chord_factor(sa: float, sb: float, tau: float) -> float:
@@ -65,34 +65,28 @@ def pdp(ca, cb, mu: float, d: np.ndarray, beta: float) -> tuple[np.ndarray, floa
 def window_certificate(ca, cb, mu: float, d: np.ndarray, tau: float, tol: float = 0.0):
     """The best of the end and chord bounds over a few β.  Returns ``(margin, how)``:
     margin > 0 proves the window; ``how`` = (kind, β).  A bound whose matrix fails a Cholesky
-    below its allowance (:func:`~meicp.lcp.certificates.below_allowance`) is not eigen-solved;
+    below its allowance is not eigen-solved (:func:`~meicp.lcp.certificates.pd_margin`);
     when every one fails so, the margin is that of the first end bound."""
     best = (-np.inf, None)
-    Ga = ca.G(mu)
+    DGa = scaled(ca.G(mu), d)
+    DGb = None if cb is None else scaled(cb.G(mu), d)
     first = None
-
-    def margin(Q, error):
-        allowance = eig_rounding(Q) + error + tol * norm2_bound(Q)
-        if below_allowance(Q, allowance):
-            return -np.inf
-        return pd_certificate(Q, error, None, tol=tol).margin
-
     for beta in [f * float(np.mean(d)) for f in (0.25, 0.5, 1.0, 2.0, 4.0)]:
         X, eX = pdp(ca, cb, mu, d, beta)
         # end bound
-        Qa = scaled(Ga, d) - X / (4 * beta)
+        Qa = DGa - X / (4 * beta)
         err_end = d.max() * ca.error(mu) + eX / (4 * beta)
         first = first or (Qa, err_end)
-        m_end = margin(Qa, err_end)
+        m_end = pd_margin(Qa, err_end, tol=tol)
         if m_end > best[0]:
             best = (m_end, ("end", beta))
         if cb is not None and best[0] <= 0:
             eb = chord_factor(ca.sigma, cb.sigma, tau)
-            Qa = scaled(Ga, d) - eb * X / (4 * beta)
-            Qb = scaled(cb.G(mu), d) - eb * X / (4 * beta)
-            m = margin(Qa, d.max() * ca.error(mu) + eb * eX / (4 * beta))
+            Qa = DGa - eb * X / (4 * beta)
+            Qb = DGb - eb * X / (4 * beta)
+            m = pd_margin(Qa, d.max() * ca.error(mu) + eb * eX / (4 * beta), tol=tol)
             if m > 0:
-                m = min(m, margin(Qb, d.max() * cb.error(mu) + eb * eX / (4 * beta)))
+                m = min(m, pd_margin(Qb, d.max() * cb.error(mu) + eb * eX / (4 * beta), tol=tol))
             if m > best[0]:
                 best = (m, ("chord", beta))
         if best[0] > 0:

@@ -89,9 +89,24 @@ def pd_certificate(G: np.ndarray, error: float, d: np.ndarray | None = None, *, 
     against a bound of the 2-norm)."""
     X = scaled(G, d)
     w, V = sl.eigh(X, subset_by_index=[0, 0])
-    dn = 1.0 if d is None else float(np.max(d))
+    return PDCertificate(float(w[0]), _allowance(X, d, error, tol), d, V[:, 0])
+
+
+def pd_margin(G: np.ndarray, error: float, d: np.ndarray | None = None, *, tol: float = 0.0) -> float:
+    """The :class:`PDCertificate` margin of :func:`pd_certificate`, or −inf without the
+    eigen-solve when a Cholesky already shows it is not positive (:func:`below_allowance`):
+    for tests that only need the margin of a proof that holds."""
+    X = scaled(G, d)
+    allowance = _allowance(X, d, error, tol)
+    if below_allowance(X, allowance):
+        return -np.inf
+    return float(sl.eigh(X, eigvals_only=True, subset_by_index=[0, 0])[0]) - allowance
+
+
+def _allowance(X: np.ndarray, d: np.ndarray | None, error: float, tol: float) -> float:
+    """The rounding allowance of λ_min(X), X = sym(DG) (see :func:`pd_certificate`)."""
     norm = norm2_bound(X)
-    return PDCertificate(float(w[0]), eig_rounding(X, norm) + dn * error + tol * norm, d, V[:, 0])
+    return eig_rounding(X, norm) + (1.0 if d is None else float(np.max(d))) * error + tol * norm
 
 
 def below_allowance(X: np.ndarray, allowance: float) -> bool:
