@@ -8,10 +8,11 @@ so the complex shift-and-invert works on the real equivalent form of order 2n,
 
 interleaved (DOF i → rows 2i, 2i+1: every rank keeps its own rows).  The real pencil
 (K_τ, B₂) has the eigenvalues {σ − τ} ∪ {σ − τ̄}; shift-and-invert at target 0 (MUMPS LU of
-K_τ, with ICNTL(15) = −2: the matrix comes in 2×2 blocks, so MUMPS analyses the node graph,
-about 3× faster; blocks of 4 — a lattice node — when n is even) returns the σ nearest τ.  For an eigenvector z = [z₁; z₂], x₊ = z₁ + i z₂
-belongs to σ = τ + μ and x₋ = z₁ − i z₂ to σ = τ̄ + μ; the one of larger norm is taken and
-its backward error is recomputed on (A, B) itself, independently of SLEPc's estimate.
+K_τ, with ICNTL(15) = −4: the matrix comes in blocks of 4 rows, a lattice node, so MUMPS
+analyses the node graph — blocks of 2 when n is odd) returns the σ nearest τ.  For an
+eigenvector z = [z₁; z₂], x₊ = z₁ + i z₂ belongs to σ = τ + μ and x₋ = z₁ − i z₂ to
+σ = τ̄ + μ; the one of larger norm is taken and its backward error is recomputed on (A, B)
+itself, independently of SLEPc's estimate (so a block-low-rank factor is never trusted).
 
 Options: prefix :data:`~meicp.petsc.options.FLUTTER` (``-meicp_flutter_eps_*``,
 ``-meicp_flutter_st_*``), code defaults < the scene's ``[petsc]`` table < command line,
