@@ -246,6 +246,63 @@ def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeyp
     assert fl.off_cluster(tau, 0).imag > tau.imag and fl.off_cluster(tau, 1).imag > fl.off_cluster(tau, 0).imag
 
 
+def test_the_2n_factor_is_analysed_in_node_blocks_only_when_they_divide_the_order():
+    """MUMPS compresses blocks of |ICNTL(15)| rows, and factors wrongly, without an error,
+    when they do not divide the order: blocks of 4 only for an even n (2n divisible by 4)."""
+    from meicp.petsc.flutter import shift_defaults
+
+    assert shift_defaults(4, 24, 1e-10, n=1000)["st_mat_mumps_icntl_15"] == -4
+    assert shift_defaults(4, 24, 1e-10, n=1001)["st_mat_mumps_icntl_15"] == -2
+    assert "st_mat_mumps_icntl_35" not in shift_defaults(4, 24, 1e-10, n=1000)
+    blr = shift_defaults(4, 24, 1e-10, n=1000, low_rank=1e-10)
+    assert blr["st_mat_mumps_icntl_35"] == 2 and blr["st_mat_mumps_cntl_7"] == 1e-10
+
+
+@pytest.mark.parametrize("parity, low_rank", [(0, None), (1, None), (0, 1e-10)])
+def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity, low_rank):
+    """The search certifies QZ's modes whether the order is even (node blocks of 4) or odd
+    (blocks of 2), with a full-rank or a block-low-rank factor of the 2n form."""
+    scene = lattice(16, (3, 3), 2.0)
+    with pencil(scene) as pen:
+        n = pen.A.shape[0] - (pen.A.shape[0] % 2 != parity)
+        A, B = pen.A[:n, :n].tocsr(), pen.B[:n, :n].tocsr()
+    assert n % 2 == parity
+    ref = fl.dense_flutter(A, B)
+    tau = ref.modes[0][0] + 0.01j
+    got = fl.search_flutter(A, B, [tau], nev=2, ncv=12, low_rank=low_rank)
+    assert got.flutter is True and got.modes
+    assert all(m[2] <= fl.RESIDUAL_TOL for m in got.modes)
+    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+
+
+def test_large_pencils_start_above_the_cluster(monkeypatch):
+    """From OFF_CLUSTER_FROM retained DOFs the proxy's target is moved up before the first
+    solve (one factorisation instead of two where it lies in a cluster), with a basis of
+    OFF_CLUSTER_NCV and a block-low-rank factor; the modes it certifies are QZ's."""
+    monkeypatch.setattr(fl, "OFF_CLUSTER_FROM", 50)
+    monkeypatch.setattr(fl, "SEARCH_LARGE", 50)
+    seen = []
+    real = fl.search_flutter
+
+    def spy(A, B, targets, comm=None, **kw):
+        seen.append((list(targets), kw))
+        return real(A, B, targets, comm, **kw)
+
+    monkeypatch.setattr(fl, "search_flutter", spy)
+    scene = lattice(16, (3, 3), 2.0)
+    with pencil(scene) as pen:
+        assert pen.maps.retained.size >= 50
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+        ref = fl.pencil_flutter(pen, scene)
+    tau = complex(fl.proxy_targets(scene, ["slip+"] * 16, 1)[0])
+    (targets, kw), = seen
+    assert targets == [fl.off_cluster(tau, 0)]
+    assert kw["ncv"] == fl.OFF_CLUSTER_NCV and kw["low_rank"] == fl.LOW_RANK_TOL
+    assert "moved up off its cluster before the first solve" in got.evidence
+    assert got.flutter is True and got.modes
+    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+
+
 @pytest.mark.mpi(min_size=2)
 def test_same_flutter_modes_on_two_ranks(comm):
     from mpi4py import MPI

@@ -62,8 +62,9 @@ MARGIN = 1e6
 SEARCH_TARGETS = 3
 SEARCH_NEV = 4
 SEARCH_NCV = 16
-#: at and above this many retained DOFs one target with nev 2, ncv 12, SLEPc tol 1e-10 (the
-#: residual gate stays 1e-10): about 3 eigen-solves of the pencil (docs/benchmarks.md, Flutter)
+#: at and above this many retained DOFs one target with nev 2, ncv 12, SLEPc tol 1e-10 and a
+#: block-low-rank factor (LOW_RANK_TOL; the residual gate stays 1e-10): about 3 eigen-solves of
+#: the pencil (docs/benchmarks.md, Flutter)
 SEARCH_LARGE = 50_000
 #: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
 #: next to the contact for it to count as contact-localised
@@ -83,6 +84,16 @@ SAME = 1e-9
 #: still inside, +0.155i certified the cluster's top edge, backward error 2e-14)
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
+#: from this many retained DOFs the search *starts* off the cluster (at off_cluster(τ, 0)), with a
+#: Krylov basis of 16 (32 on the 2n form): the proxy's σ lay inside the cluster at 3·10⁵ and
+#: 10⁶ DOFs, not at 10⁵ (backward errors 1.7e-11 there); above the cluster a basis of 12
+#: converged in 16 restarts at 3·10⁵, one of 16 in one or two (docs/benchmarks.md, Flutter)
+OFF_CLUSTER_FROM = 200_000
+OFF_CLUSTER_NCV = 16
+#: from SEARCH_LARGE retained DOFs the 2n form is factored block-low-rank at this dropping
+#: tolerance (MUMPS CNTL(7)): 2.2× faster at 10⁶ DOFs, certified pairs' backward errors
+#: 4e-13 as without it (docs/benchmarks.md, Flutter)
+LOW_RANK_TOL = 1e-10
 
 
 @dataclass
@@ -237,11 +248,13 @@ def off_cluster(tau: complex, attempt: int) -> complex:
 
 def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int | None = SEARCH_NCV,
                    tol: float = 1e-12, residual_tol: float = RESIDUAL_TOL, options: dict | None = None,
-                   why_targets: str = "", off_cluster_tries: int = OFF_CLUSTER_TRIES) -> PencilFlutter:
+                   why_targets: str = "", off_cluster_tries: int = OFF_CLUSTER_TRIES,
+                   low_rank: float | None = None) -> PencilFlutter:
     """Flutter modes of (A, B) (PETSc Mats, or SciPy distributed here over ``comm``) near the
     complex ``targets``: True with certified modes, else None — never a proof of absence.
     A target whose converged pairs all fail the residual gate is retried off the cluster
-    (:func:`off_cluster`), at most ``off_cluster_tries`` times.  Collective."""
+    (:func:`off_cluster`), at most ``off_cluster_tries`` times.  ``low_rank``: the MUMPS
+    block-low-rank tolerance of the 2n factor (None: full rank).  Collective."""
     own = not is_petsc_mat(A)
     if own:
         comm = mpi_comm(comm)
@@ -257,7 +270,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                 tau = complex(tau)
                 tau = tau.conjugate() if tau.imag < 0 else tau
                 for attempt in range(off_cluster_tries + 1):
-                    pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, options=options)
+                    pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
+                                                      options=options)
                     passed = sum(res <= residual_tol for _, _, res in pairs)
                     disks.append((tau, info["radius"], len(pairs), passed))
                     for sigma, x, res in pairs:
@@ -272,8 +286,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     if passed or not pairs or attempt == off_cluster_tries:
                         break
                     moved.append((tau, off_cluster(tau, attempt)))
-                    log.info("flutter: every pair at τ = %.6g failed the residual gate; retrying off the cluster at "
-                             "τ = %.6g", tau, moved[-1][1])
+                    log.info("flutter: every pair at τ = %s failed the residual gate; retrying off the cluster at "
+                             "τ = %s", f"{tau:.6g}", f"{moved[-1][1]:.6g}")
                     tau = moved[-1][1]
     finally:
         if own:
@@ -409,6 +423,13 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
         base = next((cs.states for cs in pen.sets if cs.name == "base"), ())
         targets = proxy_targets(scene, list(base), 1 if n >= SEARCH_LARGE else SEARCH_TARGETS) if base else []
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
+        if targets and n >= OFF_CLUSTER_FROM:
+            why += (f", each moved up off its cluster before the first solve ({n:,} ≥ {OFF_CLUSTER_FROM:,} retained "
+                    "DOFs: the proxy's σ lies inside a cluster of ill-conditioned eigenvalues at this size): "
+                    + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i → {off_cluster(t, 0).real:.4g}"
+                                f"{off_cluster(t, 0).imag:+.4g}i" for t in targets))
+            targets = [off_cluster(t, 0) for t in targets]
+            search.setdefault("ncv", OFF_CLUSTER_NCV)
         if not targets:
             targets = lambda_line_targets(0.05, np.linspace(0.5, 2.5, 3))
             why = " on the λ-line Re λ = 0.05, ω = 0.5 … 2.5 (no proxy for this scene)"
@@ -416,6 +437,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
         search.setdefault("nev", 2)
         search.setdefault("ncv", 12)
         search.setdefault("tol", 1e-10)
+        search.setdefault("low_rank", LOW_RANK_TOL)
     return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
 
 

@@ -8,10 +8,11 @@ so the complex shift-and-invert works on the real equivalent form of order 2n,
 
 interleaved (DOF i → rows 2i, 2i+1: every rank keeps its own rows).  The real pencil
 (K_τ, B₂) has the eigenvalues {σ − τ} ∪ {σ − τ̄}; shift-and-invert at target 0 (MUMPS LU of
-K_τ, with ICNTL(15) = −2: the matrix comes in 2×2 blocks, so MUMPS analyses the node graph,
-about 3× faster) returns the σ nearest τ.  For an eigenvector z = [z₁; z₂], x₊ = z₁ + i z₂
-belongs to σ = τ + μ and x₋ = z₁ − i z₂ to σ = τ̄ + μ; the one of larger norm is taken and
-its backward error is recomputed on (A, B) itself, independently of SLEPc's estimate.
+K_τ, with ICNTL(15) = −4: the matrix comes in blocks of 4 rows, a lattice node, so MUMPS
+analyses the node graph — blocks of 2 when n is odd) returns the σ nearest τ.  For an
+eigenvector z = [z₁; z₂], x₊ = z₁ + i z₂ belongs to σ = τ + μ and x₋ = z₁ − i z₂ to
+σ = τ̄ + μ; the one of larger norm is taken and its backward error is recomputed on (A, B)
+itself, independently of SLEPc's estimate (so a block-low-rank factor is never trusted).
 
 Options: prefix :data:`~meicp.petsc.options.FLUTTER` (``-meicp_flutter_eps_*``,
 ``-meicp_flutter_st_*``), code defaults < the scene's ``[petsc]`` table < command line,
@@ -50,14 +51,22 @@ def _allreduce(comm, value, op="sum"):
     return comm.allreduce(value, op={"sum": MPI.SUM, "max": MPI.MAX}[op])
 
 
-def shift_defaults(nev: int, ncv: int | None, tol: float) -> dict:
-    """Code defaults of one complex shift-and-invert solve on the 2n form (nev, ncv there)."""
+def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
+    """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
+    order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
+    (a DOF pair of the n form, i.e. a lattice node, when n is even: 1.6× fewer flops than
+    blocks of 2 at 3·10⁵ DOFs) — blocks of 2 when n is odd, since MUMPS returns a wrong
+    factor, without an error, when the order is not a multiple of the block.  ``low_rank``:
+    MUMPS block-low-rank factor and solves (ICNTL(35) = 2) at that dropping tolerance
+    (CNTL(7)); every pair is re-checked on (A, B) anyway (docs/flutter.md §4)."""
     defaults = {"eps_gen_non_hermitian": True, "eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True,
                 "eps_tol": tol, "eps_max_it": 500, "st_type": "sinvert", "st_ksp_type": "preonly",
                 "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps", "st_mat_mumps_icntl_7": 2,
-                "st_mat_mumps_icntl_15": -2}
+                "st_mat_mumps_icntl_15": -4 if n % 2 == 0 else -2}
     if ncv:
         defaults["eps_ncv"] = ncv
+    if low_rank:
+        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
     return defaults
 
 
@@ -155,14 +164,15 @@ def diagonal_of(B, B_local=None):
 
 
 def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, ncv: int | None = 12,
-                        tol: float = 1e-12, options: dict | None = None) -> tuple[list, dict]:
+                        tol: float = 1e-12, low_rank: float | None = None,
+                        options: dict | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
     shift-and-invert on the real 2n form (every σ of the real form comes with its
     conjugate: nev, ncv are doubled there).  Returns ``(pairs, info)``: pairs = [(σ with
     Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info = {``radius``:
     the largest |σ − τ| among the converged (the disk searched), ``nconv``, ``iterations``,
-    ``seconds``}.  ``options``: the scene's ``[petsc]`` table (keys without the prefix).
-    Collective."""
+    ``seconds``}.  ``low_rank``: see :func:`shift_defaults`.  ``options``: the scene's
+    ``[petsc]`` table (keys without the prefix).  Collective."""
     SLEPc = import_slepc()
     t0 = time.perf_counter()
     tau = complex(tau)
@@ -176,7 +186,8 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     zr = zi = None
     try:
         eps.setOperators(K, B2)
-        with OptionsScope(FLUTTER, shift_defaults(2 * nev, ncv and 2 * ncv, tol), options) as scope:
+        with OptionsScope(FLUTTER, shift_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank),
+                          options) as scope:
             scope.configure(eps)  # setFromOptions, last
             eps.solve()
         nconv = eps.getConverged()
