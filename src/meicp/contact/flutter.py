@@ -424,11 +424,12 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
         targets = proxy_targets(scene, list(base), 1 if n >= SEARCH_LARGE else SEARCH_TARGETS) if base else []
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
         if targets and n >= OFF_CLUSTER_FROM:
+            moved = [off_cluster(t, 0) for t in targets]
             why += (f", each moved up off its cluster before the first solve ({n:,} ≥ {OFF_CLUSTER_FROM:,} retained "
                     "DOFs: the proxy's σ lies inside a cluster of ill-conditioned eigenvalues at this size): "
-                    + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i → {off_cluster(t, 0).real:.4g}"
-                                f"{off_cluster(t, 0).imag:+.4g}i" for t in targets))
-            targets = [off_cluster(t, 0) for t in targets]
+                    + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i → {m.real:.4g}{m.imag:+.4g}i"
+                                for t, m in zip(targets, moved)))
+            targets = moved
             search.setdefault("ncv", OFF_CLUSTER_NCV)
         if not targets:
             targets = lambda_line_targets(0.05, np.linspace(0.5, 2.5, 3))

@@ -70,18 +70,18 @@ def window_certificate(ca, cb, mu: float, d: np.ndarray, tau: float, tol: float 
     best = (-np.inf, None)
     DGa = scaled(ca.G(mu), d)
     DGb = None if cb is None else scaled(cb.G(mu), d)
+    eb = None if cb is None else chord_factor(ca.sigma, cb.sigma, tau)
     first = None
     for beta in [f * float(np.mean(d)) for f in (0.25, 0.5, 1.0, 2.0, 4.0)]:
         X, eX = pdp(ca, cb, mu, d, beta)
         # end bound
         Qa = DGa - X / (4 * beta)
         err_end = d.max() * ca.error(mu) + eX / (4 * beta)
-        first = first or (Qa, err_end)
+        first = first or (Qa, err_end, beta)
         m_end = pd_margin(Qa, err_end, tol=tol)
         if m_end > best[0]:
             best = (m_end, ("end", beta))
         if cb is not None and best[0] <= 0:
-            eb = chord_factor(ca.sigma, cb.sigma, tau)
             Qa = DGa - eb * X / (4 * beta)
             Qb = DGb - eb * X / (4 * beta)
             m = pd_margin(Qa, d.max() * ca.error(mu) + eb * eX / (4 * beta), tol=tol)
@@ -92,7 +92,8 @@ def window_certificate(ca, cb, mu: float, d: np.ndarray, tau: float, tol: float 
         if best[0] > 0:
             break
     if best[1] is None:  # every bound rejected by its Cholesky: say by how much the first misses
-        best = (pd_certificate(first[0], first[1], None, tol=tol).margin, ("end", 0.25 * float(np.mean(d))))
+        Qa, err_end, beta = first
+        best = (pd_certificate(Qa, err_end, None, tol=tol).margin, ("end", beta))
     return best
 
 
