@@ -343,7 +343,7 @@ def test_solve_writes_and_prints_flutter(cli, tmp_path):
 
 
 def test_search_that_would_not_fit_in_memory_is_skipped_and_says_so(monkeypatch):
-    monkeypatch.setattr(fl, "available_memory_on", lambda comm: (1000, "this machine"))
+    monkeypatch.setattr(fl, "available_memory_on", lambda comm, need=None: (1000, "this machine"))
     scene = lattice(20, (2, 2), 3.0)
     with pencil(scene) as pen:
         r = fl.pencil_flutter(pen, scene, dense_max=0)

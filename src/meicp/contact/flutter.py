@@ -413,7 +413,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
             return dense_flutter(A, B)
         return comm.bcast(dense_flutter(A, B) if comm.Get_rank() == 0 else None, root=0)
     need = SEARCH_BYTES_PER_DOF * n
-    memory, where = available_memory_on(comm)
+    memory, where = available_memory_on(comm, need)
     if memory is not None and need > memory:
         return PencilFlutter(None, evidence=(
             f"not searched: the complex shift-and-invert of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "
