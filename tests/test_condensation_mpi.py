@@ -57,3 +57,28 @@ def test_critical_friction_bracket_on_two_ranks_matches_serial():
     ser = critical_friction(scene)
     assert par.exact and ser.exact
     assert float(par) == pytest.approx(float(ser), rel=1e-9) and par.lower == pytest.approx(ser.lower, rel=1e-6)
+
+
+def test_an_error_inside_a_served_condensation_leaves_both_ranks_in_step(monkeypatch):
+    """A condensation that raises (on every rank, as a bad input does) ends the proof with
+    that error on both ranks, and the next collective call is answered normally — it once
+    left rank 0's broadcasts unmatched and the next call hung."""
+    from meicp.contact import condenser
+    from meicp.contact.critical_friction import critical_friction
+
+    comm = MPI.COMM_WORLD
+    scene = two_layer_scene(30, (2, 2), mu=1.0, states="slip+", shear=0.5)
+    real_at = condenser.Condenser.at
+
+    def failing_at(self, sigma, **kw):
+        if sigma > 0:
+            raise ValueError("a condensation that fails")
+        return real_at(self, sigma, **kw)
+
+    monkeypatch.setattr(condenser.Condenser, "at", failing_at)
+    with pytest.raises(ValueError, match="a condensation that fails"):
+        with pencil(scene, comm=comm) as pen:
+            prove_no_divergence(comm, pen, 1.0, method="schur")
+    monkeypatch.undo()
+    cf = critical_friction(two_layer_scene(30, (2, 2), mu=1.0, states="slip-", shear=0.5), comm=comm)
+    assert cf.exact and comm.allgather(float(cf))[0] == comm.allgather(float(cf))[1]

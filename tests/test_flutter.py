@@ -17,6 +17,7 @@ from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
 from meicp.core.errors import ProblemError
 from meicp.io.scene import scene_from_dict
+from meicp.petsc.mat import to_dense
 
 from .conftest import ROOT, meicp_cmd, run
 
@@ -343,7 +344,7 @@ def test_solve_writes_and_prints_flutter(cli, tmp_path):
 
 
 def test_search_that_would_not_fit_in_memory_is_skipped_and_says_so(monkeypatch):
-    monkeypatch.setattr(fl, "available_memory_on", lambda comm: (1000, "this machine"))
+    monkeypatch.setattr(fl, "available_memory_on", lambda comm, need=None: (1000, "this machine"))
     scene = lattice(20, (2, 2), 3.0)
     with pencil(scene) as pen:
         r = fl.pencil_flutter(pen, scene, dense_max=0)
@@ -363,3 +364,19 @@ def test_search_without_a_proxy_on_a_frictional_interface():
         ref = fl.pencil_flutter(pen, scene)
     assert "λ-line" in got.evidence and got.flutter in (True, None) and ref.flutter is True
     assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+
+
+@pytest.mark.parametrize("units", [1e-7, 1e7, 1e12])
+def test_dense_verdict_does_not_depend_on_the_units(units):
+    """Stiffness ×s, mass ÷s: every σ ×s², the verdict and the counts unchanged (the
+    infinite-eigenvalue test once compared β with α unscaled: at s = 1e7 every finite σ of
+    the frictional interface became "infinite" and flutter was "proved" absent)."""
+    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+    with pencil(scene) as pen:
+        A, B = to_dense(pen.A), to_dense(pen.B)
+    ref = fl.dense_flutter(A, B)
+    got = fl.dense_flutter(units * A, B / units)
+    assert ref.flutter is True and got.flutter is True
+    assert got.counts == ref.counts and len(got.modes) == len(ref.modes)
+    for (s_got, *_), (s_ref, *_) in zip(got.modes, ref.modes):
+        assert abs(s_got / units**2 - s_ref) <= 1e-8 * abs(s_ref)

@@ -169,7 +169,8 @@ def certified_tau(comm, KFF, MFF, *, factor: MumpsFactor | None = None) -> tuple
             for v in pairs.vectors:
                 v.destroy()
         except Exception as exc:  # noqa: BLE001 — no estimate means no proof, not an error
-            return None, f"λ_min(K̃_FF, M̃_FF) not estimated ({exc}): the condensation is not certified"
+            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]  # not PETSc's whole stack
+            return None, f"λ_min(K̃_FF, M̃_FF) not estimated ({first}): the condensation is not certified"
         finally:
             if owned:
                 Kp.destroy()

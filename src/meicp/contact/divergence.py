@@ -43,6 +43,7 @@ from ..eicp.problem import lam_floor
 from ..eicp.solve import solve_eicp
 from ..petsc.inertia import rayleigh_bound, symmetric_part_definite
 from ..petsc.mat import max_abs_entry
+from ..petsc.options import PetscOptionError
 from ..petsc.window import rayleigh_estimate
 from ..scene import Scene
 from .divergence_proof import prove_no_divergence
@@ -171,6 +172,8 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
             budget["options"] = {"eps_max_it": FIRST_EPS_MAX_IT, **kwargs["options"]}
         eicp = solve_eicp(A, B, J=red.J, method="active-set", lam_min=0.0, tol=tol, comm=comm,
                           **{**kwargs, **budget})
+        if eicp.coverage.get("option_error"):  # a [petsc] / command-line value PETSc rejects: bad input
+            raise PetscOptionError(eicp.message)
         proof["supports_visited"] += int(eicp.coverage.get("supports_visited", 0))
         proof["eigen_solves"] += int(eicp.coverage.get("eigen_solves", 0))
         modes, found, left_out = _modes(eicp, pen, lam_min)

@@ -97,7 +97,12 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
                 comm.bcast(None, root=0)
         if rank != 0:
             while (sigma := comm.bcast(None, root=0)) is not None:
-                cond.at(sigma)
+                try:
+                    cond.at(sigma)
+                except Exception:  # noqa: BLE001 — rank 0 meets it too and raises it on every rank
+                    # (on_root); leaving the loop here would leave rank 0's broadcasts unmatched
+                    # and the next collective call out of step (a hang in a later call)
+                    continue
         out = on_root(comm, decide)
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
     proved, test, statement, margin, samples, window = out

@@ -185,7 +185,10 @@ def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_fa
         how = "dense QR of D^-1/2 A D^-1/2 (B = D diagonal)"
     else:
         (alpha, beta), VL, VR = sl.eig(A, B, left=True, right=True, homogeneous_eigvals=True)
-        infinite = np.abs(beta) <= n * np.finfo(float).eps * np.abs(alpha)
+        # infinite: β at the rounding level of B *relative to* α on A's scale (|σ|·‖B‖ beyond
+        # ‖A‖/(n·u)); without the norms a change of units (K ×1e7, M ÷1e7, every σ ×1e14) made
+        # every finite σ past 1/(n·u) "infinite" and the dense path proved flutter absent
+        infinite = np.abs(beta) * norm_A <= n * np.finfo(float).eps * np.abs(alpha) * norm_B
         w = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
         X = VR
         kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
@@ -413,7 +416,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
             return dense_flutter(A, B)
         return comm.bcast(dense_flutter(A, B) if comm.Get_rank() == 0 else None, root=0)
     need = SEARCH_BYTES_PER_DOF * n
-    memory, where = available_memory_on(comm)
+    memory, where = available_memory_on(comm, need)
     if memory is not None and need > memory:
         return PencilFlutter(None, evidence=(
             f"not searched: the complex shift-and-invert of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "

@@ -39,7 +39,7 @@ def chord_factor(sa: float, sb: float, tau: float) -> float:
     """ē = max over t ∈ [0, 1] of t(1 − t)(σ_b − σ_a)/(σ_a + t(σ_b − σ_a) + τ) (closed form
     of the maximiser of t(1−t)/(c + t) with c = (σ_a + τ)/(σ_b − σ_a))."""
     s = sb - sa
-    if s <= 0:
+    if s <= 0 or not np.isfinite(tau):  # τ = ∞: no free DOF, G(σ) is linear in σ
         return 0.0
     c = (sa + tau) / s
     t = -c + np.sqrt(c * c + c)  # d/dt [t(1−t)/(c+t)] = 0

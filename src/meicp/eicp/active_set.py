@@ -85,6 +85,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     A, B, owned = _petsc_pair(problem, comm)
     symmetric = _is_symmetric(problem)
     solver = None
+    option_error = False  # a value the user gave PETSc that it rejected (callers may call it bad input)
     result = EiCPResult(method="active-set")
     scales = problem.scales()
     visited: set = set()
@@ -118,6 +119,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                     pairs = solver.solve(removed, initial)
             except (PETSc.Error, PetscOptionError) as exc:  # e.g. a singular shifted matrix at the target
                 status, message = "petsc_error", _petsc_error_message(exc, it, S.size, prefix)
+                option_error = isinstance(exc, PetscOptionError)
                 break
             if lam_min is not None:
                 floor = lam_floor(lam_min, scales)  # rounding only: tol is not a λ tolerance
@@ -163,7 +165,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
         if solver is not None:
             result.coverage = {"supports_visited": len(visited), "eigen_solves": solver.solves,
                                "eps_iterations": solver.eps_iterations, "history": history,
-                               "unused_options": solver.unused_options}
+                               "unused_options": solver.unused_options, "option_error": option_error}
             solver.destroy()
         if owned:
             A.destroy()

@@ -38,19 +38,30 @@ def to_petsc_comm(comm):
     return PETSc.COMM_SELF if mcomm is None else PETSc.Comm(mcomm)
 
 
-def available_memory_on(comm) -> tuple[int | None, str]:
+def available_memory_on(comm, need: int | None = None) -> tuple[int | None, str]:
     """``(bytes, where)``: the memory the ranks of ``comm`` can allocate together, the
     available memory of each host counted once (None when a host does not say), and a
-    phrase naming the hosts for messages.  Collective."""
+    phrase naming the hosts for messages.  With ``need`` (bytes): when less is available,
+    every rank hands its free heap back (:func:`~meicp.core.machine.release_free_heap`) and
+    it is measured again.  Collective."""
     mcomm = mpi_comm(comm)
     if mcomm is None:
-        return available_memory(), "this machine"
+        memory = available_memory()
+        if need is not None and memory is not None and memory < need:
+            memory = available_memory(reclaim=True)
+        return memory, "this machine"
     from mpi4py import MPI
 
-    hosts = dict(mcomm.allgather((MPI.Get_processor_name(), available_memory())))
-    if any(v is None for v in hosts.values()):
-        return None, f"{len(hosts)} host(s)"
-    return sum(hosts.values()), "this machine" if len(hosts) == 1 else f"the {len(hosts)} hosts together"
+    def measure(reclaim):
+        hosts = dict(mcomm.allgather((MPI.Get_processor_name(), available_memory(reclaim))))
+        return None if any(v is None for v in hosts.values()) else sum(hosts.values()), len(hosts)
+
+    memory, count = measure(False)
+    if need is not None and memory is not None and memory < need:  # the same decision on every rank
+        memory, count = measure(True)
+    if memory is None:
+        return None, f"{count} host(s)"
+    return memory, "this machine" if count == 1 else f"the {count} hosts together"
 
 
 def index_max() -> int:

@@ -195,9 +195,17 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
         zr, zi = K.createVecRight(), K.createVecRight()
         pairs, seen, radius = [], [], 0.0
         comm = mpi_comm(A.getComm())
+        previous = None
         for i in range(nconv):
-            mu = complex(eps.getEigenpair(i, zr, zi))
+            mu = complex(eps.getEigenvalue(i))
             radius = max(radius, abs(mu))
+            # SLEPc returns a real form's complex eigenvalues as conjugate pairs, one after the
+            # other; the second (eigenvector z̄) maps to the same σ as the first
+            if previous is not None and mu.imag != 0 and mu == previous.conjugate():
+                previous = None
+                continue
+            previous = mu
+            eps.getEigenvector(i, zr, zi)
             z = zr.getArray(readonly=True) + 1j * zi.getArray(readonly=True)
             x_plus, x_minus = z[0::2] + 1j * z[1::2], z[0::2] - 1j * z[1::2]
             norms = [float(np.vdot(x, x).real) for x in (x_plus, x_minus)]
