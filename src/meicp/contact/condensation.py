@@ -26,10 +26,8 @@ certified lower bound τ of λ_min(K̃_FF, M̃_FF)), measured for MUMPS' Schur c
 """
 from __future__ import annotations
 
-from contextlib import nullcontext
-
 import time
-from contextlib import AbstractContextManager
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -164,7 +162,6 @@ def condense(pieces: PencilPieces, sigma: float, factor: Factor, *, tau: float |
         g = gam * (absH @ np.abs(X) + np.abs(rhs))
         bound[key] += float(np.sqrt((r * r).sum()) + np.sqrt((g * g).sum())) ** 2
 
-    t1 = time.perf_counter()
     # every retained DOF a contact DOF (a one-row lattice): G(σ) = H_JJ(σ), nothing to solve
     with factor(H_FF) if F.size else nullcontext(None) as solve:
         t1 = time.perf_counter()

@@ -45,14 +45,12 @@ def available_memory_on(comm, need: int | None = None) -> tuple[int | None, str]
     every rank hands its free heap back (:func:`~meicp.core.machine.release_free_heap`) and
     it is measured again.  Collective."""
     mcomm = mpi_comm(comm)
-    if mcomm is None:
-        memory = available_memory()
-        if need is not None and memory is not None and memory < need:
-            memory = available_memory(reclaim=True)
-        return memory, "this machine"
-    from mpi4py import MPI
 
     def measure(reclaim):
+        if mcomm is None:
+            return available_memory(reclaim), 1
+        from mpi4py import MPI
+
         hosts = dict(mcomm.allgather((MPI.Get_processor_name(), available_memory(reclaim))))
         return None if any(v is None for v in hosts.values()) else sum(hosts.values()), len(hosts)
 
@@ -60,7 +58,7 @@ def available_memory_on(comm, need: int | None = None) -> tuple[int | None, str]
     if need is not None and memory is not None and memory < need:  # the same decision on every rank
         memory, count = measure(True)
     if memory is None:
-        return None, f"{count} host(s)"
+        return None, "this machine" if mcomm is None else f"{count} host(s)"
     return memory, "this machine" if count == 1 else f"the {count} hosts together"
 
 
