@@ -40,6 +40,7 @@ from ..core.errors import ProblemError
 from ..core.log import configure_logging, rank0_print
 from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
+from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
 from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
 from .exit import Exit
@@ -241,6 +242,7 @@ def _run(args, comm, t0) -> int:
         log.info(f"writing: done in {seconds(wall['write'])}")
         rows.append(("outputs", f"{out}/  (open {files['xdmf'].name} in ParaView)"))
         rows += [("", f"  {path.name:<16} {_DESCRIBE.get(key, '')}") for key, path in files.items()]
+    report_not_offered(scene.petsc)
     wall["total"] = time.perf_counter() - t0
     rows.append(("wall", ", ".join(f"{k} {seconds(v)}" for k, v in wall.items())))
     if args.json:
