@@ -194,3 +194,19 @@ def test_progress_is_throttled_by_time():
         logger.setLevel(level)
     assert len(records) == 1 + int((5.0 - FIRST) // INTERVAL)
     assert re.fullmatch(r"search: 40 of 100 steps \(40 %\), 20 steps/s, about 3 s left", records[0].getMessage())
+
+
+def test_petsc_table_entries_no_solver_read_are_reported(tmp_path):
+    """two_layers.toml is small enough to enumerate densely: its [petsc] table reaches no
+    solver, so a value PETSc would reject ("abc") went unnoticed with exit 0; at 30 contacts
+    the SLEPc search reads it and nothing is reported."""
+    text = (SCENES / "two_layers.toml").read_text()
+    small = tmp_path / "small.toml"
+    small.write_text(text.replace("eps_tol = 1e-10", 'eps_tol = "abc"'))
+    out = run(meicp_cmd() + ["solve", str(small), "--no-output", "-q", "--no-flutter"])
+    assert out.returncode == 0, out.stderr
+    assert re.search(r"\[petsc\] entries reached no PETSc solver .*: eps_tol$", out.stderr, re.M), out.stderr
+    wide = tmp_path / "wide.toml"
+    wide.write_text(text.replace("nx = 5", "nx = 30"))
+    out = run(meicp_cmd() + ["solve", str(wide), "--no-output", "-q", "--no-flutter"])
+    assert "reached no PETSc solver" not in out.stderr, out.stderr

@@ -101,3 +101,49 @@ def test_the_bracket_contains_the_enumerated_value_on_shipped_scenes(name, monke
     monkeypatch.setattr(cf, "CRITICAL_J", 0)
     b = critical_friction(scene)
     assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
+
+
+def test_divergence_born_above_zero_is_no_contradiction_of_mu_c():
+    """Tall soft-under-stiff lattice sheared against its slip: a pair of real σ > 0 is born
+    near μ ≈ 494 (out of a complex pair) and never passes through σ = 0.  μ_c (σ = 0) does
+    not exist up to mu_max, which the bisection check took for a contradiction and raised
+    ConvergenceError (and `solve --critical-friction` threw the finished analysis away); the
+    evidence now says where the modes start and that they start above σ = 0."""
+    import dataclasses
+    import re
+
+    import meicp
+
+    scene = two_layer_scene(6, (2, 6), mu=500.0, states="slip-", shear=-0.5)
+    got = critical_friction(scene)
+    assert math.isinf(float(got)) and got.lower == 1000.0 and got.exact
+    start = float(re.search(r"from μ ≈ ([0-9.]+), born at σ", got.evidence).group(1))
+
+    def at(mu):
+        contact = dataclasses.replace(scene.contact, friction=mu)
+        return meicp.analyze(dataclasses.replace(scene, contact=contact), method="enumerate", flutter=False)
+
+    above, below = at(start * 1.001), at(start * 0.999)
+    assert above.divergence is True and min(m.sigma for m in above.modes) > 1e-3
+    assert below.divergence is False
+
+
+def test_solve_keeps_its_analysis_when_the_critical_friction_fails(cli, tmp_path, monkeypatch):
+    """`solve --critical-friction` printed nothing and wrote nothing when μ_c failed after the
+    analysis had finished; now the summary and the outputs stand, μ_c says why, exit 1."""
+    import json
+
+    import meicp.cli.solve as solve
+    from meicp.core.errors import ConvergenceError
+
+    def failing(scene, comm=None):
+        raise ConvergenceError("μ as an eigenvalue and existence disagree")
+
+    monkeypatch.setattr(solve, "critical_friction", failing)
+    scenes = Path(__file__).resolve().parents[1] / "data" / "scenes"
+    code, text, err = cli("solve", scenes / "two_layers.toml", "--critical-friction", "-o", tmp_path / "o", "-q")
+    assert code == 1 and "UNSTABLE" in text and "μ_c               not determined: μ as an eigenvalue" in text
+    assert (tmp_path / "o" / "results.h5").is_file()
+    code, text, err = cli("solve", scenes / "two_layers.toml", "--critical-friction", "--json", "--no-output")
+    doc = json.loads(text)
+    assert code == 1 and doc["critical_friction"] == {"error": "μ as an eigenvalue and existence disagree"}

@@ -338,6 +338,12 @@ def test_solve_writes_and_prints_flutter(cli, tmp_path):
         assert g["x_real"].shape == g["x_imag"].shape == (3, 40) and g["sigma_imag"].attrs["units"] == "1"
         assert "long_name" in g["frequency"].attrs
     assert "flutter_0_imag" in (out / "lattice.xdmf").read_text()
+    # the same directory again without flutter: no flutter_mode.png of the earlier run is left
+    # beside a results.h5 that has no flutter mode
+    code, text, err = cli("solve", SCENES / "two_layers.toml", "-o", out, "--no-flutter", "-q")
+    assert not (out / "flutter_mode.png").exists()
+    with h5py.File(out / "results.h5") as f:
+        assert f.attrs["n_flutter_modes"] == 0
     code, text, _ = cli("solve", SCENES / "two_layers.toml", "--no-output", "--no-flutter", "-q")
     assert code == 0 and re.search(r"^flutter +FLUTTER UNDECIDED$", text, re.M)
     assert re.search(r"^divergence +DIVERGENCE$", text, re.M) and "not analysed" in text

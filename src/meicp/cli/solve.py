@@ -36,10 +36,11 @@ from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
 from ..contact.modal import has_contact
 from ..contact.result import finite_or_none, seconds
-from ..core.errors import ProblemError
+from ..core.errors import ConvergenceError, ProblemError
 from ..core.log import configure_logging, rank0_print
 from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
+from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
 from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
 from .exit import Exit
@@ -63,7 +64,8 @@ def register(sub) -> None:
                    help="print one JSON document (verdict, modes, μ_c, outputs, timings, versions) instead "
                         "of the summary; nothing else goes to stdout")
     p.add_argument("--critical-friction", action="store_true",
-                   help="also compute μ_c, the smallest friction with a divergence mode (small scenes: enumeration)")
+                   help="also compute μ_c, the smallest friction with a σ = 0 divergence mode (small scenes: enumeration; "
+                        "modes born at σ > 0 may exist below it, and the evidence then says so)")
     p.add_argument("--method", choices=METHODS,
                    help="MEiCP method (default: the scene's [solver] method; auto = enumerate when small)")
     p.add_argument("--target", type=finite,
@@ -144,7 +146,8 @@ def overrides(args) -> dict:
     return given
 
 
-def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=None, out=None) -> dict:
+def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=None, out=None,
+               mu_c_error: str | None = None) -> dict:
     """The document ``meicp solve --json`` prints: the run (meicp version, scene, ranks, the
     command line's overrides), the result keyed like its attributes
     (:meth:`InstabilityResult.to_dict`; messages with this command's flags), the critical
@@ -159,7 +162,7 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
         data[key] = cli_spelling(data[key])
     doc.update(data)
     if mu_c is None:
-        doc["critical_friction"] = None
+        doc["critical_friction"] = None if mu_c_error is None else {"error": mu_c_error}
     else:
         record = critical_friction_record(mu_c)
         doc["critical_friction"] = {k: finite_or_none(v) if isinstance(v, float) else v for k, v in record.items()}
@@ -214,18 +217,23 @@ def _run(args, comm, t0) -> int:
     log.info(f"analysis: done in {seconds(wall['analyze'])} ({result.status})")
 
     rows = summary_rows(scene, result, ranks=comm.Get_size())
-    mu_c, files = None, {}
+    mu_c, files, mu_c_failed = None, {}, None
     if args.critical_friction and not has_contact(scene):
         rows.append(("μ_c", "not applicable: the scene has no contact, hence no friction"))
     elif args.critical_friction:
         log.info("critical friction: μ as the eigenvalue at σ = 0, condensed onto the contact DOFs "
                  "(enumerated up to 20 pairs, bracketed beyond)")
         t3 = time.perf_counter()
-        with stage("critical_friction"):
-            mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
+        try:
+            with stage("critical_friction"):
+                mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
+        except ConvergenceError as exc:  # the analysis is done: keep it, say μ_c failed, exit 1
+            mu_c_failed = str(exc)
+            rows.append(("μ_c", f"not determined: {exc}"))
+        else:
+            rows.append(("μ_c", mu_c.describe()))
+            rows.append(("", f"  {mu_c.evidence}"))
         wall["critical_friction"] = time.perf_counter() - t3
-        rows.append(("μ_c", mu_c.describe()))
-        rows.append(("", f"  {mu_c.evidence}"))
     if out is not None:
         log.info(f"writing results to {out}/")
         t2 = time.perf_counter()
@@ -241,17 +249,19 @@ def _run(args, comm, t0) -> int:
         log.info(f"writing: done in {seconds(wall['write'])}")
         rows.append(("outputs", f"{out}/  (open {files['xdmf'].name} in ParaView)"))
         rows += [("", f"  {path.name:<16} {_DESCRIBE.get(key, '')}") for key, path in files.items()]
+    report_not_offered(scene.petsc)
     wall["total"] = time.perf_counter() - t0
     rows.append(("wall", ", ".join(f"{k} {seconds(v)}" for k, v in wall.items())))
     if args.json:
-        doc = solve_json(args, scene, result, ranks=comm.Get_size(), mu_c=mu_c, files=files, wall=wall, out=out)
+        doc = solve_json(args, scene, result, ranks=comm.Get_size(), mu_c=mu_c, files=files, wall=wall, out=out,
+                         mu_c_error=mu_c_failed)
         rank0_print(json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False))
     else:
         rank0_print(format_rows(rows))
     # every rank leaves together: mpirun aborts the job as soon as one rank exits non-zero,
     # which could cut rank 0's summary short after a failed (exit 1) analysis
     comm.Barrier()
-    return Exit.OK if result.success else Exit.FAILED
+    return Exit.OK if result.success and mu_c_failed is None else Exit.FAILED
 
 
 _DESCRIBE = {"results": "scene, versions, states, forces, modes, certificates, timings",

@@ -165,8 +165,9 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
                                "eliminated (not compatible with the slip directions), so the enumeration meets "
                                "singular pencils and needs the bisection check, but the σ-problem is too large to "
                                "enumerate; pass bisection=True to run it anyway, or hold the body")
+        note = ""
         if bisection or (bisection is None and small):
-            _check_by_bisection(scene, sets, model, upper, mu_max, tol)
+            note = _check_by_bisection(scene, sets, model, upper, mu_max, tol)
         elif singular:
             log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
                         "certified but its minimality is not cross-checked", upper)
@@ -175,7 +176,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
         lower = mu_max if not np.isfinite(upper) else upper
         text = ("every support of the condensed EiCP in μ enumerated" +
                 (f": no σ = 0 mode up to μ = {mu_max:g}" if not np.isfinite(upper) else
-                 ", the smallest μ certified on the whole reduced lattice"))
+                 ", the smallest μ certified on the whole reduced lattice") + note)
         return CriticalFriction(upper, lower, True, text)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
     return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
@@ -389,36 +390,59 @@ def _smallest_mu_condensed(A1, B1, J, mu_max):
     return mu, bool(null.shape[1])
 
 
-def _has_mode(scene, sets, model, mu) -> bool:
-    """Whether a σ ≥ 0 mode exists with every contact's friction set to μ (enumeration)."""
+#: a σ ≥ 0 mode whose σ is above this multiple of max|A|/max|B| where modes start is born at
+#: σ > 0 (a pair of real σ out of a complex pair: flutter turning into divergence), not
+#: through σ = 0 — no contradiction of μ_c, which is about σ = 0
+BORN_ABOVE_ZERO = 1e-6
+
+
+def _largest_sigma(scene, sets, model, mu) -> float | None:
+    """The largest σ ≥ 0 of a mode with every contact's friction set to μ (enumeration),
+    relative to max|A|/max|B|; None without a mode."""
     scaled = [dataclasses.replace(cs, friction=mu) for cs in sets]
     K, M = assemble(model)
+    best = None
     for case in grazing_cases(scaled):
         pen = pencil_of(K, M, model, scaled, case)
         if pen.A is None:
             continue  # every DOF held: no mode (as in analyze)
-        r = solve_eicp(pen.A.toarray(), pen.B.toarray(), J=pen.J, method="enumerate", lam_min=0.0)
+        A, B = pen.A.toarray(), pen.B.toarray()
+        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0)
         if r.solutions:
-            return True
-    return False
+            sigma = max(sol.lam for sol in r.solutions) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
+            best = sigma if best is None else max(best, sigma)
+    return best
 
 
-def _check_by_bisection(scene, sets, model, mu_c, mu_max, tol):
-    """Existence of a σ ≥ 0 mode must switch on at μ_c: none just below, one at/above it."""
-    if np.isfinite(mu_c):
-        below = mu_c * (1 - 1e-6) - 1e-12
-        if below >= 0 and _has_mode(scene, sets, model, below):
-            # bisect down to see where existence really starts
-            lo, hi = 0.0, below
-            if _has_mode(scene, sets, model, 0.0):
-                raise ConvergenceError(f"a σ ≥ 0 mode exists at μ = 0 although μ as an eigenvalue gave {mu_c}")
-            while hi - lo > tol * max(1.0, hi):
-                mid = 0.5 * (lo + hi)
-                lo, hi = (lo, mid) if _has_mode(scene, sets, model, mid) else (mid, hi)
-            raise ConvergenceError(f"bisection finds modes from μ ≈ {hi:.8g}, below μ_c = {mu_c:.8g}")
-        if not _has_mode(scene, sets, model, mu_c * (1 + 1e-6) + 1e-12):
-            raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
-                                   "existence disagree")
-    elif _has_mode(scene, sets, model, mu_max):
-        raise ConvergenceError(f"μ as an eigenvalue found no μ_c ≤ {mu_max}, but a mode exists at μ = {mu_max}")
+def _has_mode(scene, sets, model, mu) -> bool:
+    """Whether a σ ≥ 0 mode exists with every contact's friction set to μ (enumeration)."""
+    return _largest_sigma(scene, sets, model, mu) is not None
+
+
+def _check_by_bisection(scene, sets, model, mu_c, mu_max, tol) -> str:
+    """Existence of a σ ≥ 0 mode against μ_c: one just above it, and where modes exist below
+    it (or, without μ_c, at ``mu_max``) they must start at σ > 0 — a pair born there, not a
+    σ = 0 crossing that μ as an eigenvalue missed.  Returns a note for the evidence ("" when
+    modes start at μ_c); ConvergenceError on a contradiction."""
+    top = mu_c * (1 - 1e-6) - 1e-12 if np.isfinite(mu_c) else mu_max
+    if np.isfinite(mu_c) and not _has_mode(scene, sets, model, mu_c * (1 + 1e-6) + 1e-12):
+        raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
+                               "existence disagree")
+    if top < 0 or not _has_mode(scene, sets, model, top):
+        return ""
+    if _has_mode(scene, sets, model, 0.0):
+        start = 0.0
+    else:  # bisect down to where modes start
+        lo, hi = 0.0, top
+        while hi - lo > tol * max(1.0, hi):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if _has_mode(scene, sets, model, mid) else (mid, hi)
+        start = hi
+    sigma = _largest_sigma(scene, sets, model, start)
+    where = f"below μ_c = {mu_c:.8g}" if np.isfinite(mu_c) else f"with no σ = 0 mode up to μ = {mu_max:g}"
+    if sigma is None or sigma <= BORN_ABOVE_ZERO:
+        raise ConvergenceError(f"σ ≥ 0 modes start at μ ≈ {start:.8g} with σ ≈ 0, {where}: a σ = 0 crossing that "
+                               "μ as an eigenvalue missed")
+    return (f"; divergence modes exist {where}, from μ ≈ {start:.8g}, born at σ = {sigma:.3g}·max|A|/max|B| > 0 "
+            "(a pair of real σ, not through σ = 0; enumeration of the σ-problem)")
 

@@ -283,7 +283,7 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
                     os.replace(stage / written[key], directory / written[key])
                 moved = True
         if plots:  # a stale PNG from an earlier run of another scene would mislead
-            for key in ("contacts_png",):
+            for key in ("flutter_png", "contacts_png"):  # flutter_mode.png: a run without flutter modes
                 if key not in written and (directory / FILES[key]).exists():
                     (directory / FILES[key]).unlink()
         return written

@@ -150,6 +150,8 @@ class OptionsScope:
         for level in reversed(range(len(self.layers))):  # highest first: lower ones never override
             for key, value in self.layers[level].items():
                 name = self.prefix + str(key).lstrip("-")
+                if level > 0:
+                    _OFFERED.add(str(key).lstrip("-"))
                 if db.hasName(name):
                     continue
                 db.setValue(name, _format(value))
@@ -180,6 +182,19 @@ class OptionsScope:
 
 
 _REPORTED: set = set()
+#: keys of a scene's ``[petsc]`` table (and other non-default layers) that some scope put
+#: in the database for a solver to read
+_OFFERED: set = set()
+
+
+def report_not_offered(keys) -> None:
+    """Warn about ``[petsc]`` table entries that reached no solver at all: the run needed
+    none that reads them (e.g. a small scene enumerated densely), so their values were
+    neither used nor checked — the table's counterpart of :func:`report_unused_options`."""
+    left = sorted(k for k in (str(key).lstrip("-") for key in keys) if k not in _OFFERED)
+    if left:
+        log.warning("the scene's [petsc] entries reached no PETSc solver (this run used none that reads them; "
+                    "their values were not checked): %s", ", ".join(left))
 
 
 def report_unused(names) -> None:
