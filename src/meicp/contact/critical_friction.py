@@ -443,6 +443,9 @@ def _check_by_bisection(scene, sets, model, mu_c, mu_max, tol) -> str:
     if sigma is None or sigma <= BORN_ABOVE_ZERO:
         raise ConvergenceError(f"σ ≥ 0 modes start at μ ≈ {start:.8g} with σ ≈ 0, {where}: a σ = 0 crossing that "
                                "μ as an eigenvalue missed")
+    if start == 0.0:  # without friction the pencil is symmetric: unstable already, no crossing involved
+        return (f"; divergence modes exist {where} already at μ = 0 (σ = {sigma:.3g}·max|A|/max|B|; enumeration "
+                "of the σ-problem)")
     return (f"; divergence modes exist {where}, from μ ≈ {start:.8g}, born at σ = {sigma:.3g}·max|A|/max|B| > 0 "
             "(a pair of real σ, not through σ = 0; enumeration of the σ-problem)")
 
