@@ -167,7 +167,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
                                "enumerate; pass bisection=True to run it anyway, or hold the body")
         note = ""
         if bisection or (bisection is None and small):
-            note = _check_by_bisection(scene, sets, model, upper, mu_max, tol)
+            note = _check_by_bisection(K, M, sets, model, upper, mu_max, tol)
         elif singular:
             log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
                         "certified but its minimality is not cross-checked", upper)
@@ -396,11 +396,10 @@ def _smallest_mu_condensed(A1, B1, J, mu_max):
 BORN_ABOVE_ZERO = 1e-6
 
 
-def _largest_sigma(scene, sets, model, mu) -> float | None:
-    """The largest σ ≥ 0 of a mode with every contact's friction set to μ (enumeration),
-    relative to max|A|/max|B|; None without a mode."""
+def _largest_sigma(K, M, sets, model, mu) -> float | None:
+    """The largest σ ≥ 0 of a mode with every contact's friction set to μ (enumeration; K, M
+    the lattice's, which μ does not change), relative to max|A|/max|B|; None without a mode."""
     scaled = [dataclasses.replace(cs, friction=mu) for cs in sets]
-    K, M = assemble(model)
     best = None
     for case in grazing_cases(scaled):
         pen = pencil_of(K, M, model, scaled, case)
@@ -414,33 +413,33 @@ def _largest_sigma(scene, sets, model, mu) -> float | None:
     return best
 
 
-def _has_mode(scene, sets, model, mu) -> bool:
-    """Whether a σ ≥ 0 mode exists with every contact's friction set to μ (enumeration)."""
-    return _largest_sigma(scene, sets, model, mu) is not None
-
-
-def _check_by_bisection(scene, sets, model, mu_c, mu_max, tol) -> str:
+def _check_by_bisection(K, M, sets, model, mu_c, mu_max, tol) -> str:
     """Existence of a σ ≥ 0 mode against μ_c: one just above it, and where modes exist below
     it (or, without μ_c, at ``mu_max``) they must start at σ > 0 — a pair born there, not a
     σ = 0 crossing that μ as an eigenvalue missed.  Returns a note for the evidence ("" when
     modes start at μ_c); ConvergenceError on a contradiction."""
+    def sigma_at(mu):
+        return _largest_sigma(K, M, sets, model, mu)
+
     top = mu_c * (1 - 1e-6) - 1e-12 if np.isfinite(mu_c) else mu_max
-    if np.isfinite(mu_c) and not _has_mode(scene, sets, model, mu_c * (1 + 1e-6) + 1e-12):
+    if np.isfinite(mu_c) and sigma_at(mu_c * (1 + 1e-6) + 1e-12) is None:
         raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
                                "existence disagree")
-    if top < 0 or not _has_mode(scene, sets, model, top):
+    sigma = None if top < 0 else sigma_at(top)
+    if sigma is None:
         return ""
-    if _has_mode(scene, sets, model, 0.0):
-        start = 0.0
-    else:  # bisect down to where modes start
+    start, at_zero = 0.0, sigma_at(0.0)
+    if at_zero is not None:
+        sigma = at_zero
+    else:  # bisect down to where modes start, keeping the largest σ there
         lo, hi = 0.0, top
         while hi - lo > tol * max(1.0, hi):
             mid = 0.5 * (lo + hi)
-            lo, hi = (lo, mid) if _has_mode(scene, sets, model, mid) else (mid, hi)
+            found = sigma_at(mid)
+            lo, hi, sigma = (lo, mid, found) if found is not None else (mid, hi, sigma)
         start = hi
-    sigma = _largest_sigma(scene, sets, model, start)
     where = f"below μ_c = {mu_c:.8g}" if np.isfinite(mu_c) else f"with no σ = 0 mode up to μ = {mu_max:g}"
-    if sigma is None or sigma <= BORN_ABOVE_ZERO:
+    if sigma <= BORN_ABOVE_ZERO:
         raise ConvergenceError(f"σ ≥ 0 modes start at μ ≈ {start:.8g} with σ ≈ 0, {where}: a σ = 0 crossing that "
                                "μ as an eigenvalue missed")
     if start == 0.0:  # without friction the pencil is symmetric: unstable already, no crossing involved
