@@ -118,6 +118,28 @@ def test_an_inconclusive_search_says_what_to_type(cli, tmp_path):
     assert "use --method enumerate" in out and "method='" not in out
 
 
+def test_a_flutter_mode_answers_when_the_divergence_search_is_inconclusive(tmp_path):
+    """Density 1e-300 in layer A: the enumeration is undecided (LAPACK's QZ does not converge)
+    while certified flutter modes prove the scene unstable.  The question is answered: exit
+    0 and status ``solved`` in the JSON and in results.h5 alike (it exited 1, "FAILED
+    (inconclusive), last verdict UNSTABLE"), divergence undecided with the failure named."""
+    text = (SCENES / "two_layers.toml").read_text()
+    assert text.count("density = 1.0") == 1  # layer A's (B has 2.0)
+    scene = tmp_path / "light.toml"
+    scene.write_text(text.replace("density = 1.0", "density = 1e-300"))
+    out = run(meicp_cmd() + ["solve", str(scene), "--json", "-o", str(tmp_path / "o"), "-q"])
+    assert out.returncode == Exit.OK, out.stderr
+    doc = json.loads(out.stdout)
+    assert (doc["verdict"], doc["stable"], doc["divergence"], doc["flutter"]) == ("UNSTABLE", False, None, True)
+    assert doc["status"] == "solved" and doc["success"] is True
+    assert "did not converge" in doc["divergence_failure"] and doc["message"] == doc["divergence_failure"]
+    with h5py.File(tmp_path / "o" / "results.h5") as f:
+        a = f.attrs
+        assert (a["status"], bool(a["success"]), a["verdict"]) == ("solved", True, "unstable")
+        assert (a["stable"], a["divergence"], a["flutter"]) == (0, -1, 1)
+        assert a["divergence_failure"] == doc["divergence_failure"]
+
+
 def test_unused_petsc_options_are_reported_whatever_their_prefix_and_stages_are_logged():
     """`-- -eps_tol 1e-3` (no prefix) was silently ignored; -log_view showed one "Main Stage"."""
     out = run(meicp_cmd() + ["solve", str(SCENES / "two_layers.toml"), "--no-output", "-q", "--",
