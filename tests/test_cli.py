@@ -85,6 +85,26 @@ def test_solve_json_is_the_only_stdout_and_carries_sigma_and_mu_c(tmp_path):
         assert "enumerated" in g.attrs["evidence"]
 
 
+def test_infinite_ends_of_the_critical_friction_are_the_string_inf_in_json():
+    """A direction proved free of σ = 0 modes at every μ has lower = upper = value = inf
+    (results.h5 stores the float inf).  --json wrote null, which reads as "unknown"; the
+    string "inf" keeps the meaning and float() reads it back (solve --critical-friction with
+    a finite lower end: tests/test_hostile_api.py, solve-critical-friction-inf-json)."""
+    from types import SimpleNamespace
+
+    from meicp.cli.solve import solve_json
+    from meicp.contact.critical_friction import CriticalFriction
+    from meicp.contact.result import InstabilityResult
+
+    mu = CriticalFriction(float("inf"), float("inf"), True, "proved at every μ")
+    doc = solve_json(SimpleNamespace(scene="s.toml"), meicp.load_scene(SCENES / "two_layers.toml"),
+                     InstabilityResult(status="solved"), ranks=1, mu_c=mu)
+    assert doc["critical_friction"] == {"value": "inf", "found": False, "lower": "inf", "upper": "inf",
+                                        "exact": True, "evidence": "proved at every μ"}
+    assert float(doc["critical_friction"]["lower"]) == mu.lower
+    json.dumps(doc, allow_nan=False)  # valid JSON
+
+
 def test_overrides_of_the_scenes_solver_table(cli, tmp_path):
     code, out, err = cli("solve", SCENES / "two_layers.toml", "-o", tmp_path / "o", "-q",
                          "--method", "active-set", "--target", "0.1", "--nev", "2")

@@ -45,7 +45,7 @@ from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
 from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
-from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
+from .arguments import cli_spelling, finite, integer, output_directory, verbosity, verbosity_of
 from .exit import Exit
 
 #: what ``--method`` may choose: the MEiCP methods :func:`analyze` decides with
@@ -60,7 +60,7 @@ def register(sub) -> None:
                        description="Decide whether a scene's lattice is stable in its contact state "
                                    "(MEiCP on PETSc/SLEPc) and write the results.")
     p.add_argument("scene", help="scene file (TOML)")
-    p.add_argument("-o", "--output", metavar="DIR",
+    p.add_argument("-o", "--output", metavar="DIR", type=output_directory,
                    help="output directory, created if missing (default: out/<scene stem>)")
     p.add_argument("--no-output", action="store_true", help="print the summary only, write no files")
     p.add_argument("--json", action="store_true",
@@ -218,7 +218,10 @@ def _run(args, comm, t0) -> int:
 
     log.info("analysis: started")
     t1 = time.perf_counter()
-    result = analyze(scene, comm=comm, scene_path=args.scene, **overrides(args))
+    try:
+        result = analyze(scene, comm=comm, scene_path=args.scene, **overrides(args))
+    except ProblemError as exc:  # its hints spelt as this command's flags: --method auto
+        raise ProblemError(cli_spelling(str(exc))) from None
     wall["analyze"] = time.perf_counter() - t1
     log.info(f"analysis: done in {seconds(wall['analyze'])} ({result.status})")
 
