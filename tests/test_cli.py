@@ -85,6 +85,26 @@ def test_solve_json_is_the_only_stdout_and_carries_sigma_and_mu_c(tmp_path):
         assert "enumerated" in g.attrs["evidence"]
 
 
+def test_infinite_ends_of_the_critical_friction_are_the_string_inf_in_json():
+    """A direction proved free of σ = 0 modes at every μ has lower = upper = value = inf
+    (results.h5 stores the float inf).  --json wrote null, which reads as "unknown"; the
+    string "inf" keeps the meaning and float() reads it back (solve --critical-friction with
+    a finite lower end: tests/test_hostile_api.py, solve-critical-friction-inf-json)."""
+    from types import SimpleNamespace
+
+    from meicp.cli.solve import solve_json
+    from meicp.contact.critical_friction import CriticalFriction
+    from meicp.contact.result import InstabilityResult
+
+    mu = CriticalFriction(float("inf"), float("inf"), True, "proved at every μ")
+    doc = solve_json(SimpleNamespace(scene="s.toml"), meicp.load_scene(SCENES / "two_layers.toml"),
+                     InstabilityResult(status="solved"), ranks=1, mu_c=mu)
+    assert doc["critical_friction"] == {"value": "inf", "found": False, "lower": "inf", "upper": "inf",
+                                        "exact": True, "evidence": "proved at every μ"}
+    assert float(doc["critical_friction"]["lower"]) == mu.lower
+    json.dumps(doc, allow_nan=False)  # valid JSON
+
+
 def test_overrides_of_the_scenes_solver_table(cli, tmp_path):
     code, out, err = cli("solve", SCENES / "two_layers.toml", "-o", tmp_path / "o", "-q",
                          "--method", "active-set", "--target", "0.1", "--nev", "2")
@@ -116,6 +136,28 @@ def test_an_inconclusive_search_says_what_to_type(cli, tmp_path):
                          "--nev", "1")
     assert code == Exit.FAILED
     assert "use --method enumerate" in out and "method='" not in out
+
+
+def test_a_flutter_mode_answers_when_the_divergence_search_is_inconclusive(tmp_path):
+    """Density 1e-300 in layer A: the enumeration is undecided (LAPACK's QZ does not converge)
+    while certified flutter modes prove the scene unstable.  The question is answered: exit
+    0 and status ``solved`` in the JSON and in results.h5 alike (it exited 1, "FAILED
+    (inconclusive), last verdict UNSTABLE"), divergence undecided with the failure named."""
+    text = (SCENES / "two_layers.toml").read_text()
+    assert text.count("density = 1.0") == 1  # layer A's (B has 2.0)
+    scene = tmp_path / "light.toml"
+    scene.write_text(text.replace("density = 1.0", "density = 1e-300"))
+    out = run(meicp_cmd() + ["solve", str(scene), "--json", "-o", str(tmp_path / "o"), "-q"])
+    assert out.returncode == Exit.OK, out.stderr
+    doc = json.loads(out.stdout)
+    assert (doc["verdict"], doc["stable"], doc["divergence"], doc["flutter"]) == ("UNSTABLE", False, None, True)
+    assert doc["status"] == "solved" and doc["success"] is True
+    assert "did not converge" in doc["divergence_failure"] and doc["message"] == doc["divergence_failure"]
+    with h5py.File(tmp_path / "o" / "results.h5") as f:
+        a = f.attrs
+        assert (a["status"], bool(a["success"]), a["verdict"]) == ("solved", True, "unstable")
+        assert (a["stable"], a["divergence"], a["flutter"]) == (0, -1, 1)
+        assert a["divergence_failure"] == doc["divergence_failure"]
 
 
 def test_unused_petsc_options_are_reported_whatever_their_prefix_and_stages_are_logged():

@@ -43,3 +43,22 @@ def test_bad_scene_on_two_ranks_exits_promptly_once_and_writes_nothing(tmp_path,
     assert time.monotonic() - t0 < 60  # a liveness bound: a hang would sit at the 120 s timeout
     assert out.stderr.count("meicp: error:") == 1 and words in out.stderr
     assert not (tmp_path / "o").exists()
+
+
+
+@pytest.mark.parametrize("nx, args, words", [
+    (5, ["-o", ""], "meicp solve: error: argument -o/--output: an empty path names no directory"),
+    (22, ["--method", "enumerate"], "meicp: error: method 'enumerate' visits all 2^|J| supports: |J| = 22"),
+    (5, ["--target", "-1e6x"], "meicp solve: error: argument --target: not a number: '-1e6x'"),
+], ids=["output-empty", "enumerate-22-pairs", "target-garbage"])
+def test_bad_flags_on_two_ranks_say_so_once_and_write_nothing(tmp_path, nx, args, words):
+    """A usage error was printed by every rank (argparse runs on each), and the enumeration
+    of 2^22 supports started (hours).  Now one message from rank 0, exit 2, nothing made."""
+    scene = tmp_path / "wide.toml"
+    scene.write_text((SCENES / "two_layers.toml").read_text().replace("nx = 5", f"nx = {nx}"))
+    output = [] if "-o" in args else ["-o", str(tmp_path / "o")]
+    out = run(mpirun(2) + meicp_cmd() + ["solve", str(scene), "-q"] + args + output, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert out.stderr.count("error:") == 1 and words in out.stderr, out.stderr
+    assert out.stderr.count("usage:") <= 1 and "Traceback" not in out.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["wide.toml"]

@@ -55,6 +55,7 @@ def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monke
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
     assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
     assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "[0, inf]" in r.evidence
+    assert r.to_dict()["proofs"][0]["sigma_window"] == [0.0, "inf"]  # JSON (and results.h5): was [0.0, null]
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
     assert r.divergence is not False and r.stable is not True
 

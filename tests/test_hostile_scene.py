@@ -262,10 +262,21 @@ def test_a_layer_of_density_1e16_is_never_stable(method):
 
 def test_an_enumeration_that_cannot_resolve_its_pencil_is_undecided():
     """density 1e-300 in one layer: LAPACK's QZ does not converge on some supports (it used
-    to raise LinAlgError out of analyze); the enumeration says undecided, analyze too."""
-    r = meicp.analyze(loads_scene(_layer("A", "density", "1e-300")), method="enumerate")
-    assert r.divergence is None and r.status == "inconclusive" and r.eicp[0].status == "undecided"
+    to raise LinAlgError out of analyze); the enumeration says undecided, analyze too.
+
+    The scene also has certified flutter modes, which prove it unstable: the question is
+    answered, so the run is ``solved`` (it used to be ``inconclusive``, a failure) with
+    divergence undecided and the failure named; without flutter nothing is decided and the
+    run is ``inconclusive``."""
+    scene = loads_scene(_layer("A", "density", "1e-300"))
+    r = meicp.analyze(scene, method="enumerate")
+    assert r.divergence is None and r.eicp[0].status == "undecided"
+    assert r.flutter is True and r.stable is False and r.status == "solved" and r.success
     assert "the QZ eigen-solve (LAPACK) did not converge" in r.evidence and "not a proof" in r.evidence
+    assert "did not converge" in r.divergence_failure and r.message == r.divergence_failure
+    assert r.divergence_verdict == "DIVERGENCE UNDECIDED (search inconclusive: enumerate ended undecided)"
+    r = meicp.analyze(scene, method="enumerate", flutter=False)
+    assert r.stable is None and r.status == "inconclusive" and not r.success and "did not converge" in r.message
 
 
 @pytest.mark.parametrize("status", ["undecided", "out_of_range", "max_iterations"])
@@ -276,8 +287,14 @@ def test_only_a_no_solution_enumeration_proves_stability(monkeypatch, status):
         return EiCPResult(method="enumerate", status=status, message=f"{status}: the reason")
 
     monkeypatch.setattr(divergence, "solve_eicp", fake)
+    # without flutter the question stays open: a failure (inconclusive)
+    r = meicp.analyze(SCENES / "two_layers.toml", method="enumerate", flutter=False)
+    assert r.divergence is None and r.stable is None and r.status == "inconclusive"
+    assert f"not a proof ({status})" in r.evidence and r.message == f"{status}: the reason"
+    # the scene's certified flutter mode answers it (UNSTABLE): solved, divergence still undecided
     r = meicp.analyze(SCENES / "two_layers.toml", method="enumerate")
-    assert r.divergence is None and r.status == "inconclusive" and f"not a proof ({status})" in r.evidence
+    assert r.divergence is None and r.flutter is True and r.stable is False and r.status == "solved"
+    assert r.divergence_failure == f"{status}: the reason" and f"not a proof ({status})" in r.evidence
 
 
 # ---------------------------------------------------------------------------------------
@@ -377,8 +394,11 @@ SOLVE_CASES = [
     ("lam-min-0.5", _solver("lam_min = 0.5"), 0, r"verdict +UNSTABLE\ndivergence +DIVERGENCE\n.*1 with 0 ≤ σ < lam_min = 0\.5 not listed"),
     ("bom", b"\xef\xbb\xbf" + TWO_LAYERS.encode(), 0, r"verdict +UNSTABLE(.|\n)*0\.32905494"),
     ("density-1e-16", _layer("A", "density", "1e-16"), 0, r"verdict +UNSTABLE(.|\n)*3\.2866196e\+15"),
-    ("density-1e-300", _layer("A", "density", "1e-300"), 1,
-     r"verdict +FAILED \(inconclusive\)(, last verdict UNSTABLE)?\ndivergence +DIVERGENCE UNDECIDED\nevidence .*QZ eigen-solve \(LAPACK\) did not converge"),
+    # flutter modes prove it unstable while the divergence enumeration is undecided: the
+    # question is answered (exit 0; it exited 1, "FAILED (inconclusive), last verdict UNSTABLE")
+    ("density-1e-300", _layer("A", "density", "1e-300"), 0,
+     r"verdict +UNSTABLE\ndivergence +DIVERGENCE UNDECIDED \(search inconclusive: enumerate ended undecided\)\n"
+     r"evidence .*QZ eigen-solve \(LAPACK\) did not converge(.|\n)*flutter +FLUTTER\n"),
 ]
 
 

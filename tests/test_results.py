@@ -59,7 +59,7 @@ def unstable_result(scene, *, static=True) -> InstabilityResult:
                                    held=np.zeros(nx, dtype=bool), u=0.01 * smooth_shape(scene, 2.0),
                                    interface_r_n={}, status="solved", success=True, iterations=7,
                                    equilibrium_residual=1e-15, guarantees=["unique solution"])
-    eicp = types.SimpleNamespace(method="enumerate", status="solved", message="2 solutions",
+    eicp = types.SimpleNamespace(method="enumerate", status="solved", success=True, message="2 solutions",
                                  coverage={"supports": 31, "eigen_solves": 31})
     return InstabilityResult(status="solved", message="2 modes", iterations=31, residual=5e-12,
                              timings={"assemble": 0.01, "eicp": 0.2}, modes=modes, stable=False,

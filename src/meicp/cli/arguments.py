@@ -1,8 +1,10 @@
-"""Argument types for the subcommands' numeric flags: argparse reports a bad value as a
-one-line usage error naming the flag (exit code 2), before any work is done.
+"""The parser every subcommand shares (:class:`Parser`) and the argument types of their
+flags: argparse reports a bad value as a one-line usage error naming the flag (exit code 2),
+before any work is done.
 
-Each wraps the check of :mod:`meicp.core.validation` that the API applies to the same
-argument, so the command line and the Python API refuse the same values with the same words.
+Each numeric type wraps the check of :mod:`meicp.core.validation` that the API applies to the
+same argument, so the command line and the Python API refuse the same values with the same
+words.
 """
 
 from __future__ import annotations
@@ -11,7 +13,29 @@ import argparse
 import re
 
 from ..core.errors import ProblemError
+from ..core.log import world_rank
 from ..core.validation import as_int, as_real, check_tol
+
+#: an argument that starts like a negative number: a value, never an option (no meicp option
+#: starts with a digit, "inf" or "nan").  argparse 3.11 knows only -1 and -0.5, so ``--target
+#: -1e6`` failed with "expected one argument" (Python 3.13 widened its own pattern alike to
+#: "-digit"); ``-inf``, ``-nan`` and a typo such as ``-1e6x`` reach the type's check and its message
+NEGATIVE_NUMBER = re.compile(r"^-(\.?\d|inf|nan)", re.IGNORECASE)
+
+
+class Parser(argparse.ArgumentParser):
+    """``argparse.ArgumentParser`` (its subcommands' parsers too) with negative numbers in any
+    spelling as option values (:data:`NEGATIVE_NUMBER`), and its usage, errors, ``--help``
+    and ``--version`` printed on rank 0 only: every rank parses the same command line, so a
+    usage error is the same on all of them and is said once, not once per rank."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER  # argparse's own attribute, read by its parser
+
+    def _print_message(self, message, file=None):  # every print of argparse goes through here
+        if world_rank() == 0:
+            super()._print_message(message, file)
 
 
 def _number(text: str) -> float:
@@ -45,6 +69,14 @@ def cli_spelling(text: str) -> str:
     """A solver's message with the Python API's keyword hints spelt as this command line's
     flags: "use method='enumerate'" becomes "use --method enumerate"."""
     return _API_HINT.sub(lambda m: f"--{m.group(1)} {m.group(3)}", text or "")
+
+
+def output_directory(text: str) -> str:
+    """A directory path, not empty: ``-o ""`` (an unset shell variable, say) named no
+    directory and fell back to the default silently."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path names no directory (leave the option out for the default)")
+    return text
 
 
 def verbosity(parser: argparse.ArgumentParser) -> None:

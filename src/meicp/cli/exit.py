@@ -18,7 +18,8 @@ class Exit(IntEnum):
 
 #: what each exit code means, for ``meicp --help``
 MEANING = {
-    Exit.OK: "the command answered: stable, unstable, undecided with what was proved, or the "
+    Exit.OK: "the command answered: stable, unstable (also a certified flutter mode while the "
+             "divergence search was inconclusive), undecided with what was proved, or the "
              "modal analysis of a scene without contact",
     Exit.FAILED: "no certified answer: a solver stopped without one (the message says why)",
     Exit.BAD_INPUT: "bad input or usage: a scene key, a file, an argument, a PETSc option value",

@@ -18,14 +18,15 @@ from ..petsc.comm import available_memory_on, index_max
 from ..petsc.mat import destroying, diagonal, nonzeros
 from ..petsc.stages import stage
 from ..plotting.lattice import plot_lattice
-from .arguments import verbosity
+from .arguments import output_directory, verbosity
 from .exit import Exit
 
 
 def register(sub) -> None:
     p = sub.add_parser("lattice", help="build a scene's lattice, assemble K and M, write HDF5 + XDMF + PNG")
     p.add_argument("scene", help="scene file (TOML)")
-    p.add_argument("-o", "--output", default=".", help="output directory, created if missing (default: .)")
+    p.add_argument("-o", "--output", default=".", type=output_directory,
+                   help="output directory, created if missing (default: .)")
     p.add_argument("--name", help="file name stem (default: the scene file's)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG")
     p.add_argument("--no-assemble", action="store_true",

@@ -25,7 +25,7 @@ from ..core.log import configure_logging, rank0_print, world_rank
 from ..petsc import init
 from ..petsc.options import PREFIXES, report_unused_options
 from . import eicp, info, lattice, lcp, solve
-from .arguments import verbosity_of
+from .arguments import Parser, verbosity_of
 from .exit import MEANING, Exit
 from .signals import interrupted, interrupts_end_the_run, wait_for_the_end
 
@@ -47,7 +47,7 @@ def epilog() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="meicp",
         description="Stability of layered elastic lattices in frictional contact (MEiCP/LCP on PETSc/SLEPc).",
         epilog=epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)

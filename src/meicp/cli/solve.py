@@ -20,7 +20,10 @@ since the start of the run: the phases of this command and of the analysis are s
 default (INFO), ``-q`` shows warnings only, ``-vv`` adds debug output.
 
 Exit codes: 0 the analysis answered (stable, unstable, undecided with ``success``, or a
-modal analysis), 1 it failed (``result.success`` is False, or a solver raised), 2 bad input.
+modal analysis) — unstable also when a certified flutter mode decides it while the
+divergence search was inconclusive (the divergence row says so); 1 it failed
+(``result.success`` is False: nothing decided the verdict, or a solver raised; or μ_c was
+asked for and not determined), 2 bad input.
 """
 
 from __future__ import annotations
@@ -35,14 +38,14 @@ from ..info import __version__
 from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
 from ..contact.modal import has_contact
-from ..contact.result import finite_or_none, seconds
+from ..contact.result import finite_or_none, json_number, seconds
 from ..core.errors import ConvergenceError, ProblemError
 from ..core.log import configure_logging, rank0_print
 from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
 from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
-from .arguments import cli_spelling, finite, integer, verbosity, verbosity_of
+from .arguments import cli_spelling, finite, integer, output_directory, verbosity, verbosity_of
 from .exit import Exit
 
 #: what ``--method`` may choose: the MEiCP methods :func:`analyze` decides with
@@ -57,7 +60,7 @@ def register(sub) -> None:
                        description="Decide whether a scene's lattice is stable in its contact state "
                                    "(MEiCP on PETSc/SLEPc) and write the results.")
     p.add_argument("scene", help="scene file (TOML)")
-    p.add_argument("-o", "--output", metavar="DIR",
+    p.add_argument("-o", "--output", metavar="DIR", type=output_directory,
                    help="output directory, created if missing (default: out/<scene stem>)")
     p.add_argument("--no-output", action="store_true", help="print the summary only, write no files")
     p.add_argument("--json", action="store_true",
@@ -151,7 +154,9 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
     """The document ``meicp solve --json`` prints: the run (meicp version, scene, ranks, the
     command line's overrides), the result keyed like its attributes
     (:meth:`InstabilityResult.to_dict`; messages with this command's flags), the critical
-    friction (None when not asked; ``value`` None when none was found), the output files,
+    friction (None when not asked; ``value``, ``lower``, ``upper`` numbers, or the string
+    ``"inf"`` for an infinite end where results.h5 stores the float inf: ``value`` "inf" when
+    no σ = 0 mode was found, ``lower`` "inf" when none exists at any μ), the output files,
     the wall-clock timings of this command and the versions of the stack."""
     doc = {"format": "meicp-solve", "format_version": 1, "meicp_version": __version__,
            "scene": {"path": str(args.scene), "title": scene.title, "nx": scene.nx, "ny": scene.ny,
@@ -165,7 +170,8 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
         doc["critical_friction"] = None if mu_c_error is None else {"error": mu_c_error}
     else:
         record = critical_friction_record(mu_c)
-        doc["critical_friction"] = {k: finite_or_none(v) if isinstance(v, float) else v for k, v in record.items()}
+        # an infinite end keeps its meaning ("inf": no mode found / none at any μ), as in results.h5
+        doc["critical_friction"] = {k: json_number(v) if isinstance(v, float) else v for k, v in record.items()}
     doc["output"] = None if out is None else {"directory": str(out), **{k: str(v) for k, v in (files or {}).items()}}
     doc["wall"] = {k: finite_or_none(v) for k, v in (wall or {}).items()}
     doc["versions"] = versions()
@@ -212,7 +218,10 @@ def _run(args, comm, t0) -> int:
 
     log.info("analysis: started")
     t1 = time.perf_counter()
-    result = analyze(scene, comm=comm, scene_path=args.scene, **overrides(args))
+    try:
+        result = analyze(scene, comm=comm, scene_path=args.scene, **overrides(args))
+    except ProblemError as exc:  # its hints spelt as this command's flags: --method auto
+        raise ProblemError(cli_spelling(str(exc))) from None
     wall["analyze"] = time.perf_counter() - t1
     log.info(f"analysis: done in {seconds(wall['analyze'])} ({result.status})")
 

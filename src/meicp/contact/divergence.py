@@ -1,8 +1,9 @@
 """The divergence verdict of one contact state's MEiCP (docs/design.md §8): its certified
 modes with σ ≥ 0, or a proof that none exists, or *undecided* with what was established.
 
-Small reduced problems are enumerated (every support: the modes, or a proof of none).
-Larger ones are decided, cheapest first:
+Small reduced problems are enumerated (every support: the modes, or a proof of none); an
+enumeration asked for by name is refused past ``ENUMERATE_J`` pairs unless ``max_j`` raises
+the limit (:func:`check_enumeration_size`).  Larger ones are decided, cheapest first:
 
 1. **Rayleigh bound at 0** — complementarity gives ``xᵀw = 0``, so every solution has
    ``σ = xᵀsym(A)x / xᵀsym(B)x``: ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` (LDLᵀ inertias with a
@@ -39,7 +40,9 @@ import time
 
 import numpy as np
 
-from ..eicp.problem import lam_floor
+from ..core.errors import ProblemError
+from ..core.validation import as_int
+from ..eicp.problem import MAX_ENUMERATED, lam_floor
 from ..eicp.solve import solve_eicp
 from ..petsc.inertia import rayleigh_bound, symmetric_part_definite
 from ..petsc.mat import max_abs_entry
@@ -52,7 +55,9 @@ from .problem import Pencil
 from .result import Mode
 
 #: reduced problems are enumerated when 2^|J| dense eigen-solves of size r cost at most
-#: about this many flops (2^|J|·r³), with r ≤ ENUMERATE_N and |J| ≤ ENUMERATE_J
+#: about this many flops (2^|J|·r³), with r ≤ ENUMERATE_N and |J| ≤ ENUMERATE_J.  ENUMERATE_J
+#: also bounds ``method="enumerate"`` asked for by name (unless ``max_j`` raises it): 22
+#: pairs on 110 retained DOFs measured 3.4 h, and hours grow to days with the lattice
 ENUMERATE_FLOPS = 2e9
 ENUMERATE_N = 600
 ENUMERATE_J = 16
@@ -83,6 +88,23 @@ def enumeration_is_small(r: int, n_j: int) -> bool:
     return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
 
 
+def check_enumeration_size(n_j: int, options: dict) -> None:
+    """ProblemError when an enumeration of 2^n_j supports is past the limit: ENUMERATE_J
+    pairs, or the ``max_j`` keyword's (at most MAX_ENUMERATED) when the caller raised it.
+    The error names the limit and the methods that decide past it."""
+    given = options.get("max_j")
+    limit = ENUMERATE_J if given is None else as_int(given, "max_j", minimum=0, maximum=MAX_ENUMERATED)
+    if n_j <= limit:
+        return
+    name = (f"max_j = {limit}" if given is not None
+            else f"the limit of {limit} pairs ({2 ** limit:,} supports, meicp.contact.divergence.ENUMERATE_J)")
+    raise_it = (f", or raise the limit with analyze(..., max_j={n_j}) from Python" if n_j <= MAX_ENUMERATED
+                else f"; max_j cannot exceed {MAX_ENUMERATED}")
+    raise ProblemError(f"method 'enumerate' visits all 2^|J| supports: |J| = {n_j} complementarity pairs is "
+                       f"{2 ** n_j:,} supports, past {name}; each pair more doubles the time; use method='auto' "
+                       f"or method='active-set', which decide past it with proofs that scale{raise_it}")
+
+
 def divergence_of(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: float, options):
     """``(modes, evidence, stable, eicp, proof)`` of one pencil: its certified modes with
     σ ≥ lam_min, the evidence sentence, the verdict on σ ≥ 0 (True proved stable, False a
@@ -93,6 +115,8 @@ def divergence_of(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: 
     chosen = method if method not in (None, "auto") else ("enumerate" if small else "active-set")
     if chosen == "active-set":
         return _window_verdict(pen, scene, comm, lam_min, tol, options)
+    if chosen == "enumerate":  # before any work: an enumeration by name may not start a days-long run
+        check_enumeration_size(int(red.J.size), options)
     kwargs = dict(options)
     eicp = solve_eicp(pen.A, pen.B, J=red.J, method=chosen, lam_min=0.0, tol=tol, comm=comm, **kwargs)
     modes, found, left_out = _modes(eicp, pen, lam_min)

@@ -155,22 +155,21 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     result.eicp = eicps
     result.proofs = proofs
     if any(s is False for s in stable_flags):  # a mode with σ ≥ 0, listed or not (lam_min)
-        result.stable = False
+        result.divergence = True
     elif all(s is True for s in stable_flags):
-        result.stable = True
+        result.divergence = False
     else:
-        result.stable = None
+        result.divergence = None
     result.evidence = " | ".join(evidences)
-    failed = [e for e in eicps if e is not None and not e.success and e.status not in ("no_solution",)]
-    if result.stable is None and failed:
-        result.status = "inconclusive"
-        result.message = failed[0].message
-    else:
-        result.status = "solved"
-    result.divergence = None if result.stable is None else not result.stable
     sliding = sliding or not_analysed("flutter = false")
     result.flutter, result.flutter_modes, result.flutter_evidence = sliding.flutter, sliding.modes, sliding.evidence
     result.compose_verdict()
+    # the question is answered once `stable` is decided: a certified flutter mode proves
+    # instability even when the divergence search failed, so that failure leaves divergence
+    # undecided (its evidence and `divergence_failure` say why) but is no failure of the run
+    why = result.divergence_failure
+    result.status = "inconclusive" if result.stable is None and why is not None else "solved"
+    result.message = why or ""
     timings["flutter"] = sliding.seconds
     timings["total"] = time.perf_counter() - t_start
     result.timings = timings

@@ -127,12 +127,15 @@ class InstabilityResult(Result):
         vibration modes (σ = −ω² ≤ 0), lowest frequency first.
     divergence: False when no σ ≥ 0 solution exists and that is proved (``evidence`` says
         how); True when a certified divergence mode exists; None when the search was
-        inconclusive.
+        inconclusive (:attr:`divergence_failure` says why when a solver failed).
     flutter: True when a certified flutter mode of steady sliding exists, False when its
         absence is proved (dense QZ of the whole spectrum, or symmetry), None when undecided
         or not analysed (``flutter_evidence`` says which).
     stable: True only when divergence and flutter are both False; False when either is
-        True; else None.  In a modal analysis: the modal verdict.
+        True; else None.  In a modal analysis: the modal verdict.  ``status`` is
+        ``"inconclusive"`` (success False) only when ``stable`` is None because a solver
+        failed: a certified flutter mode answers the question (UNSTABLE, status ``solved``)
+        even when the divergence search failed, which then stays undecided.
     evidence: one sentence on what the divergence search covered and what it proves.
     flutter_modes: certified :class:`FlutterMode` s, fastest (largest growth rate) first.
     flutter_evidence: what the flutter analysis searched and what it proves.
@@ -177,9 +180,28 @@ class InstabilityResult(Result):
         parts = (self.divergence, self.flutter)
         self.stable = False if True in parts else (True if all(p is False for p in parts) else None)
 
+    def _failed_search(self):
+        """The first MEiCP whose solver failed when divergence is undecided, else None."""
+        if self.divergence is not None:
+            return None
+        return next((e for e in self.eicp if e is not None and not e.success and e.status != "no_solution"), None)
+
+    @property
+    def divergence_failure(self) -> str | None:
+        """Why the divergence search was inconclusive — the message of the first MEiCP whose
+        solver failed — or None (divergence decided, or undecided with what was proved and no
+        failure).  Set whether or not flutter decided the verdict."""
+        e = self._failed_search()
+        return None if e is None else (e.message or f"{e.method}: {e.status}")
+
     @property
     def divergence_verdict(self) -> str:
-        return {True: "DIVERGENCE", False: "NO DIVERGENCE"}.get(self.divergence, "DIVERGENCE UNDECIDED")
+        """DIVERGENCE, NO DIVERGENCE or DIVERGENCE UNDECIDED, the last with "(search
+        inconclusive: enumerate ended undecided)" when a solver failed (the reason is in the
+        evidence: not repeated on this line)."""
+        text = {True: "DIVERGENCE", False: "NO DIVERGENCE"}.get(self.divergence, "DIVERGENCE UNDECIDED")
+        e = self._failed_search()
+        return text if e is None else f"{text} (search inconclusive: {e.method or 'the solver'} ended {e.status})"
 
     @property
     def flutter_verdict(self) -> str:
@@ -196,7 +218,8 @@ class InstabilityResult(Result):
     def to_dict(self) -> dict:
         """The result as JSON-ready values, keyed like its attributes (``meicp solve --json``):
         analysis, verdict, stable, divergence, flutter, status, success, message, evidence,
-        flutter_evidence, modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
+        divergence_failure (None, or why the divergence search was inconclusive), flutter_evidence,
+        proofs (an infinite σ-window end as the string "inf": :func:`json_number`), modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
         :meth:`FlutterMode.to_dict`), states, interface_states, sizes, timings, and the
         static equilibrium's status when states were solved for."""
         static = self.static
@@ -204,7 +227,8 @@ class InstabilityResult(Result):
             "analysis": self.analysis, "verdict": self.verdict, "stable": self.stable,
             "divergence": self.divergence, "flutter": self.flutter,
             "status": self.status, "success": self.success, "message": self.message,
-            "evidence": self.evidence, "iterations": int(self.iterations),
+            "evidence": self.evidence, "divergence_failure": self.divergence_failure,
+            "iterations": int(self.iterations),
             "proofs": [{str(k): _json_value(v) for k, v in p.items()} for p in self.proofs],
             "modes": [m.to_dict() for m in self.modes],
             "flutter_evidence": self.flutter_evidence,
@@ -332,15 +356,26 @@ def finite_or_none(value) -> float | None:
     return value if np.isfinite(value) else None
 
 
+def json_number(value) -> float | str | None:
+    """A float for JSON where an infinite value means something (a bracket's or a window's
+    end): ±inf as the strings ``"inf"`` / ``"-inf"`` (JSON has no infinity; ``float()``
+    reads them back; results.h5 stores the float itself), NaN (unknown) as None."""
+    value = float(value)
+    if np.isnan(value):
+        return None
+    return value if np.isfinite(value) else ("inf" if value > 0 else "-inf")
+
+
 def seconds(t: float) -> str:
     """A duration for people: milliseconds below a second."""
     return f"{t * 1e3:.1f} ms" if t < 1 else f"{t:.2f} s"
 
 
 def _json_value(v):
-    """A proof entry as a JSON value: tuples as lists, non-finite floats as None."""
+    """A proof entry as a JSON value: tuples as lists, floats by :func:`json_number` (a
+    σ-window [0, ∞) is ``[0.0, "inf"]``)."""
     if isinstance(v, (tuple, list)):
         return [_json_value(x) for x in v]
     if isinstance(v, float):
-        return finite_or_none(v)
+        return json_number(v)
     return v

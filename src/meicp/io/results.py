@@ -25,7 +25,10 @@ In the output directory::
                                    undecided | no contact), ``stable`` (1 | 0 | -1 for
                                    undecided), ``evidence``, ``n_modes``, ``ranks``,
                                    ``units_convention``, ``divergence`` and ``flutter``
-                                   (1 | 0 | -1 for undecided), ``flutter_evidence``,
+                                   (1 | 0 | -1 for undecided), ``divergence_failure`` (only
+                                   when a divergence solver failed: why divergence is
+                                   undecided; ``status`` is then ``inconclusive`` unless
+                                   flutter decided the verdict), ``flutter_evidence``,
                                    ``n_flutter_modes``, ``divergence_tests`` (the test behind
                                    each MEiCP's divergence verdict: enumerate,
                                    rayleigh-inertia, rayleigh-window+condensed-…,
