@@ -386,3 +386,28 @@ def test_dense_verdict_does_not_depend_on_the_units(units):
     assert got.counts == ref.counts and len(got.modes) == len(ref.modes)
     for (s_got, *_), (s_ref, *_) in zip(got.modes, ref.modes):
         assert abs(s_got / units**2 - s_ref) <= 1e-8 * abs(s_ref)
+
+
+def test_the_real_form_rows_are_the_kronecker_products_and_the_skew_bound_its_formula():
+    import scipy.sparse as sp
+
+    from meicp.petsc.flutter import SlidingPencilOps, real_form_rows
+    from meicp.petsc.mat import destroying, mat_from_scipy
+
+    rng = np.random.default_rng(5)
+    C = sp.random(9, 9, density=0.3, random_state=1, format="lil")
+    C[4] = 0.0  # an empty row
+    B = sp.diags(rng.uniform(0.5, 2.0, 9), format="lil")
+    B[0, 3] = 0.25  # and an off-diagonal mass entry
+    K, B2 = real_form_rows(sp.csr_matrix(C), sp.csr_matrix(B), 0.37)
+    J2 = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    assert np.abs(K.toarray() - (np.kron(C.toarray(), np.eye(2)) + 0.37 * np.kron(B.toarray(), J2))).max() == 0
+    assert np.abs(B2.toarray() - np.kron(B.toarray(), np.eye(2))).max() == 0
+    A = rng.standard_normal((9, 9))
+    d = rng.uniform(0.5, 2.0, 9)
+    W = 0.5 * (A - A.T) / np.sqrt(np.outer(d, d))
+    with destroying(mat_from_scipy(None, sp.csr_matrix(A)), mat_from_scipy(None, sp.diags(d, format="csr"))) as (Ap, Bp):
+        with SlidingPencilOps(Ap, Bp) as ops:
+            assert ops.skew_bound() == pytest.approx(np.abs(W).sum(axis=1).max(), rel=1e-14)
+    sigma = sl.eigvals(A, np.diag(d))
+    assert np.abs(sigma.imag).max() <= np.abs(W).sum(axis=1).max()
