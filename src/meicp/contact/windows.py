@@ -106,16 +106,20 @@ class Cover:
     samples: list = field(default_factory=list)   # σ values condensed
     failed: tuple | None = None                   # (σ_a, σ_b, margin) of the window that stopped it
     seconds: float = 0.0
+    tau: float = 0.0                              # the certified τ the chords used last
 
 
 def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_samples: int = 24,
           initial: int = 1, optimise: bool = True, d_seed: np.ndarray | None = None, tol: float = 0.0,
-          scale: float | None = None) -> Cover:
+          scale: float | None = None, sharper_tau=None) -> Cover:
     """Prove G(σ) ∈ R₀ for every σ in [0, σ_max] (σ_max = ∞ allowed) by windows.
 
     ``condense_at(σ)`` returns a :class:`~.condensation.Condensed` with the Ξ blocks.  ``tau``: the
     certified lower bound of λ_min(K̃_FF, M̃_F).  ``scale``: where windows are split (default τ; an
-    estimate of λ_min, certified or not: it moves the samples, not the bounds).  ``d_seed``: the starting scaling of every
+    estimate of λ_min, certified or not: it moves the samples, not the bounds).  ``sharper_tau()``:
+    certifies a larger τ (e.g. ``scale``) at the cost of a factorisation, returning it (or the
+    old τ); called at most once, when a chord failed that it would tighten by a tenth or more.
+    ``d_seed``: the starting scaling of every
     sample's optimisation (e.g. the critical-friction bracket's D, near-optimal at σ = 0).  The first windows split [0, σ_max] uniformly
     in log(σ + τ) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
     split at the geometric mean of its σ + τ ends, until ``max_samples`` condensations.
@@ -172,6 +176,12 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
         if best[0] > 0:
             out.windows.append((a, b, best[0], best[1]))
             continue
+        if (sharper_tau is not None and np.isfinite(b) and s_split > tau
+                and chord_factor(a, b, s_split) < 0.9 * chord_factor(a, b, tau)):
+            before, tau, sharper_tau = tau, max(tau, sharper_tau()), None
+            if tau > before:
+                pending.insert(0, (a, b))  # the same window again, its chord tighter
+                continue
         # no window can start at a sample that is not itself certified: stop splitting
         if not pd_certificate(ca.G(mu), ca.error(mu), dopt, tol=tol).proved or len(cache) >= max_samples:
             out.failed = (a, b, best[0])
@@ -184,4 +194,5 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
         out.proved = True
     out.samples = sorted(cache)
     out.seconds = time.perf_counter() - t0
+    out.tau = tau
     return out
