@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
+from meicp.contact.condenser import held_factor, refined_solve
 from meicp.contact.divergence_proof import prove_no_divergence
 from meicp.contact.maps import contact_sets, reduced_system
 from meicp.contact.problem import pencil
@@ -141,6 +142,41 @@ def test_the_issue_scene_is_proved_stable_and_the_unstable_one_is_not():
     assert t1.proved and t1.test == "condensed-pd" and t1.window == (0.0, 0.0)
     unstable = prove_no_divergence(None, pencil(two_layer_scene(60, (2, 2), mu=3.0, states="slip-", shear=0.5)), 1.0)
     assert not unstable.proved and unstable.window == () and "σ = 0 not excluded" in unstable.statement
+
+
+def test_held_factor_proves_a_held_lattice_and_its_refined_solves_are_those_of_k_ff():
+    p, _ = split()
+    F = p.F
+    KFF, MFF = p.Kt[F][:, F].tocsr(), p.Mt[F][:, F].tocsr()
+    factor, tau, why = held_factor(None, KFF, MFF)
+    try:
+        lam = np.linalg.eigvalsh(np.linalg.solve(np.diag(MFF.diagonal()), KFF.toarray())).min()
+        assert factor is not None and why == "" and 0 < tau < lam
+        rhs = np.random.default_rng(3).standard_normal((F.size, 3))
+        exact = np.linalg.solve(KFF.toarray(), rhs)
+        x = refined_solve(factor, KFF)(rhs)
+        assert np.abs(x - exact).max() <= 1e-12 * np.abs(exact).max()
+    finally:
+        factor.destroy()
+
+
+@pytest.mark.parametrize("gap", [0.0, 1e-15, -1e-3])
+def test_held_factor_refuses_a_lattice_that_is_not_held_or_is_held_only_within_rounding(gap):
+    import scipy.sparse as sp
+    KFF = sp.csr_matrix(np.array([[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0 + gap]]))
+    factor, tau, why = held_factor(None, KFF, sp.identity(3, format="csr"))
+    assert factor is None and tau is None and "not proved positive definite" in why
+
+
+@pytest.mark.parametrize("states,mu,sigma_max", [("slip+", 1.0, np.inf), ("slip-", 0.8, np.inf), ("slip-", 3.0, 1.0),
+                                                 ("slip+", 1.0, 1.0)])
+def test_the_schur_method_proves_what_the_solves_method_proves(states, mu, sigma_max):
+    scene = two_layer_scene(12, (2, 2), mu=mu, states=states, shear=0.5)
+    by_solves = prove_no_divergence(None, pencil(scene), sigma_max, method="solves")
+    by_schur = prove_no_divergence(None, pencil(scene), sigma_max, method="schur")
+    assert by_schur.proved == by_solves.proved
+    if by_schur.proved:
+        assert by_schur.test == by_solves.test and not has_mode(scene)
 
 
 def test_a_huge_tolerance_leaves_it_undecided():

@@ -386,3 +386,20 @@ def test_dense_verdict_does_not_depend_on_the_units(units):
     assert got.counts == ref.counts and len(got.modes) == len(ref.modes)
     for (s_got, *_), (s_ref, *_) in zip(got.modes, ref.modes):
         assert abs(s_got / units**2 - s_ref) <= 1e-8 * abs(s_ref)
+
+
+def test_the_skew_bound_is_its_formula_and_bounds_every_imaginary_part():
+    import scipy.sparse as sp
+
+    from meicp.petsc.flutter import SlidingPencilOps
+    from meicp.petsc.mat import destroying, mat_from_scipy
+
+    rng = np.random.default_rng(5)
+    A = rng.standard_normal((9, 9))
+    d = rng.uniform(0.5, 2.0, 9)
+    W = 0.5 * (A - A.T) / np.sqrt(np.outer(d, d))
+    with destroying(mat_from_scipy(None, sp.csr_matrix(A)), mat_from_scipy(None, sp.diags(d, format="csr"))) as (Ap, Bp):
+        with SlidingPencilOps(Ap, Bp) as ops:
+            assert ops.skew_bound() == pytest.approx(np.abs(W).sum(axis=1).max(), rel=1e-14)
+    sigma = sl.eigvals(A, np.diag(d))
+    assert np.abs(sigma.imag).max() <= np.abs(W).sum(axis=1).max()

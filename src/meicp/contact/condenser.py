@@ -10,8 +10,11 @@ Two ways (``method``):
   proved by one MUMPS inertia).  Needs a diagonal M̃_FF.
 * ``"schur"``: MUMPS' Schur complement of the bordered matrix (:meth:`PencilPieces.bordered`)
   onto J and |J| extra rows, one factorisation per σ; it has no residual, so its error is
-  *measured* once, at σ = 0, along three probe vectors with a separate MUMPS factor of K̃_FF,
-  and charged ``PROBE_SAFETY`` times over (a measurement, not a bound).
+  *measured* once, at σ = 0, along three probe vectors solved with K̃_FF, and charged
+  ``PROBE_SAFETY`` times over (a measurement, not a bound).  Those solves refine on one MUMPS
+  LDLᵀ of K̃_FF − 2ηD whose inertia is also the proof that the lattice is held and gives
+  the certified τ the σ-windows need (:func:`held_factor`): one factorisation of order |F|
+  besides the Schur complements (there were three: K̃_FF, its inertia, τM̃_FF − K̃_FF).
 
 ``"auto"``: solves while |F|·|J| ≤ ``SOLVES_LIMIT`` and the mass is diagonal, else Schur.
 Collective on ``comm`` (every rank holds the SciPy pieces; MUMPS factors them distributed).
@@ -27,7 +30,7 @@ import scipy.sparse as sp
 from ..core.threads import dense_phase
 from ..lattice.assembly import assemble_scipy
 from ..petsc.eigen import solve_ghep
-from ..petsc.inertia import nonnegative_count, pencil_is_negative, rounding_margin
+from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy
 from ..petsc.schur import MumpsFactor, dense_schur, mumps_factor
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
@@ -40,6 +43,8 @@ PROBE_SAFETY = 100.0
 SCHUR_ERROR_FLOOR = 1e-13
 #: SLEPc options of the estimate of λ_min(K̃_FF, M̃_FF) (half of it is certified)
 TAU_EPS = {"eps_tol": 1e-3, "eps_ncv": 6, "eps_purify": False}
+#: iterative refinement steps of a solve with K̃_FF on the factor of K̃_FF − 2ηD (:func:`refined_solve`)
+REFINE_STEPS = 4
 
 
 class Condenser:
@@ -66,6 +71,10 @@ class Condenser:
         self.seconds: dict = {}
         self._schur0: Condensed | None = None
         self._factor0: MumpsFactor | None = None
+        self._solve0 = None
+        #: where the windows are split (:func:`~.windows.cover`): half SLEPc's estimate of
+        #: λ_min(K̃_FF, M̃_FF), not certified (the certified bound is ``tau``)
+        self.tau_scale: float | None = None
 
     def __enter__(self) -> "Condenser":
         return self
@@ -84,39 +93,56 @@ class Condenser:
         return (MFF - sp.diags(MFF.diagonal())).count_nonzero() == 0
 
     def prepare(self, *, need_tau: bool, keep_factor: bool = False) -> bool:
-        """Prove K̃_FF ≻ 0 (and τ when ``need_tau`` or the solves method need it) and, for the
-        Schur method, measure its error (keeping G(0) and, with ``keep_factor``, the factor of
-        K̃_FF for :meth:`factor_FF`).  Returns ``ready``."""
+        """Prove K̃_FF ≻ 0 (with a certified τ when ``need_tau`` or the solves method need it)
+        and, for the Schur method, measure its error (keeping G(0) and, with ``keep_factor``,
+        the factor of K̃_FF for :meth:`factor_FF`).  Returns ``ready``.
+
+        The Schur method makes one factorisation here, :func:`held_factor`'s: its inertia is the
+        proof that the lattice is held (and gives a certified τ > 0, tiny but enough for the
+        windows' chords, whose σ-ends sit far above λ_min), SLEPc's estimate of λ_min that only
+        places the windows reuses it, and the probe solves with K̃_FF by refining on it."""
         t = time.perf_counter()
         F = self.pieces.F
         KFF = self.pieces.Kt[F][:, F].tocsr()
         MFF = self.pieces.Mt[F][:, F].tocsr()
-        # the Schur method's probe needs a factor of K̃_FF: factored first, the τ estimate's
-        # shift-and-invert reuses it (one factorisation of K̃_FF, not two)
-        factor = (MumpsFactor(self.comm, KFF, symmetric=True)
-                  if F.size and self.method == "schur" and need_tau else None)
+        factor = None
         try:
             if F.size == 0:
                 self.tau, self.ready, self.why = np.inf, True, ""
-            elif need_tau or self.method == "solves":
-                self.tau, self.why = certified_tau(self.comm, KFF, MFF, factor=factor)
+            elif self.method == "solves":
+                self.tau, self.why = certified_tau(self.comm, KFF, MFF)
                 self.ready = self.tau is not None
             else:
-                self.ready, self.why = held(self.comm, KFF)
+                factor, self.tau, self.why = held_factor(self.comm, KFF, MFF)
+                self.ready = factor is not None
+                if self.ready and need_tau:
+                    self.tau_scale = max(self.tau, 0.5 * estimate_lambda_min(factor, MFF))
             self.seconds["held"] = time.perf_counter() - t
             if self.ready and self.method == "schur":
                 t = time.perf_counter()
-                if factor is None:
-                    factor = MumpsFactor(self.comm, KFF, symmetric=True)
-                self.relative_error, X = schur_error(self.comm, self.pieces, factor.solve)
+                solve = refined_solve(factor, KFF)
+                self.relative_error, X = schur_error(self.comm, self.pieces, solve)
                 if keep_factor:
-                    self._factor0, factor = factor, None
+                    self._factor0, self._solve0, factor = factor, solve, None
                 self._schur0 = from_bordered_schur(self.pieces, 0.0, X, self.relative_error)
                 self.seconds["probe"] = time.perf_counter() - t
         finally:
             if factor is not None:
                 factor.destroy()
         return self.ready
+
+    def sharper_tau(self) -> float:
+        """Certify ``tau_scale`` as τ by one more inertia (of τM̃_FF − K̃_FF), for chords near
+        σ = 0 where the tiny τ of :func:`held_factor` costs windows; returns the certified τ (the
+        old one when this fails).  Collective."""
+        if self.tau_scale is not None and self.tau is not None and self.tau_scale > self.tau:
+            t = time.perf_counter()
+            F = self.pieces.F
+            if not tau_inertia(self.comm, self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr(),
+                               self.tau_scale):
+                self.tau = self.tau_scale
+            self.seconds["tau"] = time.perf_counter() - t
+        return self.tau
 
     def at(self, sigma: float, *, xi: bool = True) -> Condensed:
         """G(σ) = S + R (and the Ξ blocks) with its error.  Collective."""
@@ -138,51 +164,95 @@ class Condenser:
         """A MUMPS factor of H_FF(σ) as a context manager giving the solve, e.g. to lift x_J
         (the kept factor of K̃_FF at σ = 0, left open for :meth:`destroy`)."""
         if sigma == 0 and self._factor0 is not None:
-            return nullcontext(self._factor0.solve)
+            return nullcontext(self._solve0)
         F = self.pieces.F
         return MumpsFactor(self.comm, (sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F], symmetric=True)
 
 
-def held(comm, KFF) -> tuple[bool, str]:
-    """Whether K̃_FF ≻ 0 is proved: one MUMPS inertia of −K̃_FF + η·diag (rounding margin η)."""
-    with destroying(mat_from_scipy(comm, (-KFF).tocsr())) as (A,):
-        count = nonnegative_count(A, rounding_margin(KFF.shape[0]))
-    if count == 0:
-        return True, ""
-    return False, (f"K̃_FF is not proved positive definite ({count} eigenvalue(s) of the diagonally scaled −K̃_FF "
-                   "within rounding of 0 or above): the lattice is not held once the contact DOFs are")
+def held_factor(comm, KFF, MFF) -> tuple[MumpsFactor | None, float | None, str]:
+    """One MUMPS LDLᵀ of K̃_FF − 2η·D (D = diag|K̃_FF|, η the rounding margin of
+    :func:`~meicp.petsc.inertia.rounding_margin`) and the proof its inertia gives: every pivot
+    positive means K̃_FF − 2ηD ≻ 0 up to the factorisation's rounding (one η), so K̃_FF ≻ ηD ≻ 0
+    — the lattice is held once the contact DOFs are — and, with a diagonal M̃_FF,
+    τ = η·min(D/M̃_FF) ≤ λ_min(K̃_FF, M̃_FF).  Returns ``(factor, τ, "")`` (τ 0 for a
+    non-diagonal mass), or ``(None, None, why)`` when not proved (the factor destroyed)."""
+    eta = rounding_margin(KFF.shape[0])
+    d = diagonal_scale(KFF)
+    factor = MumpsFactor(comm, (KFF - sp.diags(2 * eta * d)).tocsr(), symmetric=True, options=INERTIA_OPTIONS)
+    negative, zero, _ = factor.inertia()
+    if negative or zero:
+        factor.destroy()
+        return None, None, (f"K̃_FF is not proved positive definite ({negative + zero} pivot(s) of K̃_FF − 2η·diag "
+                            f"(η = {eta:.1e}) not positive): the lattice is not held once the contact DOFs are")
+    m = MFF.diagonal()
+    diagonal = (MFF - sp.diags(m)).count_nonzero() == 0 and m.size and m.min() > 0
+    return factor, float(eta * np.min(d / m)) if diagonal else 0.0, ""
 
 
-def certified_tau(comm, KFF, MFF, *, factor: MumpsFactor | None = None) -> tuple[float | None, str]:
-    """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF): half a SLEPc estimate, proved by
-    the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`), which
-    also proves K̃_FF ≻ 0.  ``factor``: a :class:`MumpsFactor` of K̃_FF that the estimate's
-    shift-and-invert reuses.  ``(None, why)`` when not certified."""
-    owned = factor is None
-    Kp = mat_from_scipy(comm, KFF) if owned else factor.A
-    with destroying(mat_from_scipy(comm, MFF)) as (Mp,):
+def estimate_lambda_min(factor: MumpsFactor, MFF) -> float:
+    """SLEPc's estimate of λ_min(K̃_FF, M̃_FF) by shift-and-invert on ``factor`` (of
+    :func:`held_factor`: its 2ηD shift is far below the estimate's tolerance); 0 when SLEPc
+    fails — an estimate places windows, it proves nothing."""
+    with destroying(mat_from_scipy(factor.pcomm, MFF)) as (Mp,):
+        try:
+            pairs = solve_ghep(factor.A, Mp, nev=1, target=0.0, options=TAU_EPS, ksp=factor.ksp)
+        except Exception:  # noqa: BLE001 — no estimate: windows split by the certified τ
+            return 0.0
+        for v in pairs.vectors:
+            v.destroy()
+        return max(float(pairs.values[0]), 0.0)
+
+
+def refined_solve(factor: MumpsFactor, KFF, steps: int = REFINE_STEPS):
+    """Solves with K̃_FF itself from the factor of K̃_FF − 2ηD: iterative refinement, each step
+    dividing the error by about λ_min(K̃_FF)/(2η·max D) (≈ 10⁶ on the lattices measured), so
+    a few steps reach rounding; it stops when the residual no longer shrinks."""
+    def solve(rhs: np.ndarray) -> np.ndarray:
+        x = factor.solve(rhs)
+        last = np.inf
+        for _ in range(steps):
+            r = rhs - KFF @ x
+            size = float(np.abs(r).max(initial=0.0))
+            if size == 0.0 or size >= 0.5 * last:
+                break
+            last = size
+            x = x + factor.solve(r)
+        return x
+    return solve
+
+
+def certified_tau(comm, KFF, MFF) -> tuple[float | None, str]:
+    """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
+    use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
+    (:func:`~meicp.petsc.inertia.pencil_is_negative`), which also proves K̃_FF ≻ 0.
+    ``(None, why)`` when not certified."""
+    with destroying(mat_from_scipy(comm, KFF), mat_from_scipy(comm, MFF)) as (Kp, Mp):
         try:
             # half the estimate is certified below: a loose tolerance, a short basis and no
             # purification of the vector are enough (3·10⁵ DOFs: 0.47 s instead of 1.17 s)
-            pairs = solve_ghep(Kp, Mp, nev=1, target=0.0, options=TAU_EPS, ksp=None if owned else factor.ksp)
+            pairs = solve_ghep(Kp, Mp, nev=1, target=0.0, options=TAU_EPS)
             est = float(pairs.values[0])
             for v in pairs.vectors:
                 v.destroy()
         except Exception as exc:  # noqa: BLE001 — no estimate means no proof, not an error
             first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]  # not PETSc's whole stack
             return None, f"λ_min(K̃_FF, M̃_FF) not estimated ({first}): the condensation is not certified"
-        finally:
-            if owned:
-                Kp.destroy()
         if not est > 0:
             return None, (f"K̃_FF is not positive definite (λ_min ≈ {est:.2e}): the lattice is not held once the "
                           "contact DOFs are, the condensation is undefined")
-        tau = 0.5 * est
-        with destroying(mat_from_scipy(comm, (tau * MFF - KFF).tocsr())) as (Ap,):
-            sign = pencil_is_negative(Ap, Mp, symmetric=True)  # K̃_FF symmetrised, M̃_FF = Q̃ᵀMQ̃
+    tau = 0.5 * est
+    why = tau_inertia(comm, KFF, MFF, tau)
+    return (tau, "") if not why else (None, why)
+
+
+def tau_inertia(comm, KFF, MFF, tau: float) -> str:
+    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`)
+    proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  Collective."""
+    with destroying(mat_from_scipy(comm, (tau * MFF - KFF).tocsr()), mat_from_scipy(comm, MFF)) as (Ap, Mp):
+        sign = pencil_is_negative(Ap, Mp, symmetric=True)  # K̃_FF symmetrised, M̃_FF = Q̃ᵀMQ̃
     if sign is None or sign.proved is not True:
-        return None, f"τ = {tau:.3e} ≤ λ_min(K̃_FF, M̃_FF) not certified ({'' if sign is None else sign.reason})"
-    return tau, ""
+        return f"τ = {tau:.3e} ≤ λ_min(K̃_FF, M̃_FF) not certified ({'' if sign is None else sign.reason})"
+    return ""
 
 
 def schur_error(comm, pieces: PencilPieces, solve_KFF) -> tuple[float, np.ndarray]:

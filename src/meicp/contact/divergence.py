@@ -14,7 +14,9 @@ the limit (:func:`check_enumeration_size`).  Larger ones are decided, cheapest f
 2. **The σ-window** ``[0, σ_max]``: ``σ_max`` placed by Lanczos on ``(sym A, sym B)``
    (:func:`meicp.petsc.window.rayleigh_estimate`) and certified by the same bound at
    ``τ = σ_max`` (no solution above it).  It also bounds the real part of every eigenvalue
-   of every support's pencil.
+   of every support's pencil.  Not looked for when the short run found no Ritz value above 0
+   (and the bound at 0 failed): the top then sits in the cluster of slow vibrations, where
+   Lanczos stalls.
 3. **Modes from the top**: the SLEPc active-set search (:mod:`meicp.eicp.active_set`) with
    its shift at σ_max, so the first pair it takes is the rightmost eigenvalue of the full
    support S = J — never the slow vibrations clustered just below 0 that a shift at 0
@@ -168,15 +170,22 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
             return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text,
                                               sigma_window=(0.0, math.inf))
         stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
-    if b_definite and not converged:
+    # the whole Lanczos run only after a positive Ritz value: with none in the short run the top
+    # sits in the cluster of slow vibrations (the bound at 0 just failed on it) and the run stalls
+    # for its whole budget (8.8 s at 10⁶ DOFs, slip+ μ = 0.1) — the proof then covers [0, ∞)
+    stalls = not theta > RITZ_POSITIVE * scale
+    if b_definite and not converged and not stalls:
         theta, converged = rayleigh_estimate(A, B)[:2]
     # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
     sigma_max = _certified_top(A, B, theta, scale) if converged else None
     log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
              time.perf_counter() - t0)
     if sigma_max is None:
-        stopped.append(f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)"
-                       if math.isfinite(theta) else "no σ-window (λ_max(sym A, sym B) not estimated)")
+        stopped.append("no σ-window (λ_max(sym A, sym B) not estimated)" if not math.isfinite(theta) else
+                       f"no σ_max: no Ritz value of (sym A, sym B) above 0 in {PROBE_RESTARTS} Lanczos restarts "
+                       f"(largest {theta:.6g}; the top lies among the slow vibrations, where Lanczos stalls)"
+                       if stalls and not converged else
+                       f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)")
     # 3. modes from the top: a short search first (a mode on the full support, or one
     # support update away, is found at once), then the condensed proof, then — neither
     # decided — the whole search; on a stable lattice a long search finds nothing and costs

@@ -84,21 +84,24 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
         return DivergenceProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()
     if comm is None or comm.Get_size() == 1:
-        out = on_root(comm, lambda: _decide(cond.at, sigma_max, cond.tau, tol, max_samples))
+        out = on_root(comm, lambda: _decide(cond.at, cond.sharper_tau, sigma_max, cond.tau, tol, max_samples,
+                                            cond.tau_scale))
     else:
-        # rank 0 decides; the other ranks serve its condensations until it sends None
+        # rank 0 decides; the other ranks serve its requests (a σ to condense at, or SHARPER_TAU)
+        # until it sends None
         def decide():
-            def served(sigma):
-                comm.bcast(sigma, root=0)
-                return cond.at(sigma)
+            def served(request):
+                comm.bcast(request, root=0)
+                return _serve(cond, request)
             try:
-                return _decide(served, sigma_max, cond.tau, tol, max_samples)
+                return _decide(served, lambda: served(SHARPER_TAU), sigma_max, cond.tau, tol, max_samples,
+                               cond.tau_scale)
             finally:
                 comm.bcast(None, root=0)
         if rank != 0:
-            while (sigma := comm.bcast(None, root=0)) is not None:
+            while (request := comm.bcast(None, root=0)) is not None:
                 try:
-                    cond.at(sigma)
+                    _serve(cond, request)
                 except Exception:  # noqa: BLE001 — rank 0 meets it too and raises it on every rank
                     # (on_root); leaving the loop here would leave rank 0's broadcasts unmatched
                     # and the next collective call out of step (a hang in a later call)
@@ -109,7 +112,15 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     return DivergenceProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
 
 
-def _decide(condense_at, sigma_max, tau, tol, max_samples):
+#: the request, served like a σ, that certifies the λ_min estimate as τ (:meth:`Condenser.sharper_tau`)
+SHARPER_TAU = "sharper τ"
+
+
+def _serve(cond: Condenser, request):
+    return cond.sharper_tau() if request == SHARPER_TAU else cond.at(request)
+
+
+def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=None):
     """T1 then T2 on rank 0: ``(proved, test, statement, margin, samples, window)``."""
     c0 = condense_at(0.0)
     G0 = c0.G()
@@ -121,12 +132,14 @@ def _decide(condense_at, sigma_max, tau, tol, max_samples):
     if sigma_max == 0:
         return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
                 f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
-    cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol)
+    cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale,
+                sharper_tau=sharper_tau)
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])
         return (True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] ({len(cov.windows)} "
-                f"windows, {n} condensations, τ = {tau:.3g})", margin, n, (0.0, float(sigma_max)))
+                f"windows, {n} condensations, τ = {cov.tau:.3g} certified"
+                + (f", split at the scale {scale:.3g}" if scale and scale > cov.tau else "") + ")", margin, n, (0.0, float(sigma_max)))
     covered = 0.0
     for a, b, *_ in sorted(cov.windows):
         if a <= covered:

@@ -42,6 +42,8 @@ def chord_factor(sa: float, sb: float, tau: float) -> float:
     if s <= 0 or not np.isfinite(tau):  # τ = ∞: no free DOF, G(σ) is linear in σ
         return 0.0
     c = (sa + tau) / s
+    if c <= 0:  # σ_a = τ = 0: the supremum, approached as t → 0
+        return 1.0
     t = -c + np.sqrt(c * c + c)  # d/dt [t(1−t)/(c+t)] = 0
     t = min(max(t, 0.0), 1.0)
     return float(t * (1 - t) / (c + t)) * (1 + 1e-12)
@@ -104,20 +106,27 @@ class Cover:
     samples: list = field(default_factory=list)   # σ values condensed
     failed: tuple | None = None                   # (σ_a, σ_b, margin) of the window that stopped it
     seconds: float = 0.0
+    tau: float = 0.0                              # the certified τ the chords used last
 
 
 def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_samples: int = 24,
-          initial: int = 1, optimise: bool = True, d_seed: np.ndarray | None = None, tol: float = 0.0) -> Cover:
+          initial: int = 1, optimise: bool = True, d_seed: np.ndarray | None = None, tol: float = 0.0,
+          scale: float | None = None, sharper_tau=None) -> Cover:
     """Prove G(σ) ∈ R₀ for every σ in [0, σ_max] (σ_max = ∞ allowed) by windows.
 
     ``condense_at(σ)`` returns a :class:`~.condensation.Condensed` with the Ξ blocks.  ``tau``: the
-    certified lower bound of λ_min(K̃_FF, M̃_F).  ``d_seed``: the starting scaling of every
+    certified lower bound of λ_min(K̃_FF, M̃_F).  ``scale``: where windows are split (default τ; an
+    estimate of λ_min, certified or not: it moves the samples, not the bounds).  ``sharper_tau()``:
+    certifies a larger τ (e.g. ``scale``) at the cost of a factorisation, returning it (or the
+    old τ); called at most once, before the first chord it would tighten by a tenth or more.
+    ``d_seed``: the starting scaling of every
     sample's optimisation (e.g. the critical-friction bracket's D, near-optimal at σ = 0).  The first windows split [0, σ_max] uniformly
     in log(σ + τ) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
     split at the geometric mean of its σ + τ ends, until ``max_samples`` condensations.
     """
     t0 = time.perf_counter()
     cache, d_cache = {}, {}
+    s_split = tau if scale is None or not scale > tau else scale
 
     def at(s):
         if s not in cache:
@@ -138,13 +147,18 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
 
     out = Cover(False)
     if np.isfinite(sigma_max) and initial > 1:
-        pts = np.exp(np.linspace(np.log(tau), np.log(sigma_max + tau), initial + 1)) - tau
+        pts = np.exp(np.linspace(np.log(s_split), np.log(sigma_max + s_split), initial + 1)) - s_split
         pts[0], pts[-1] = 0.0, sigma_max
         pending = list(zip(pts[:-1], pts[1:]))
     else:
         pending = [(0.0, sigma_max)]
     while pending:
         a, b = pending.pop(0)
+        if (sharper_tau is not None and np.isfinite(b) and s_split > tau
+                and chord_factor(a, b, s_split) < 0.9 * chord_factor(a, b, tau)):
+            # before the window's dense certificates, not after they fail: at |J| = 2,000 a
+            # failed try cost 4 s more than the inertia
+            tau, sharper_tau = max(tau, sharper_tau()), None
         ca = at(a)
         cb = at(b) if np.isfinite(b) else None
         best = (-np.inf, None)
@@ -171,7 +185,7 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
         if not pd_certificate(ca.G(mu), ca.error(mu), dopt, tol=tol).proved or len(cache) >= max_samples:
             out.failed = (a, b, best[0])
             break
-        mid = 2.0 * a + tau if not np.isfinite(b) else np.sqrt((a + tau) * (b + tau)) - tau
+        mid = 2.0 * a + s_split if not np.isfinite(b) else np.sqrt((a + s_split) * (b + s_split)) - s_split
         if not np.isfinite(b) and a == 0:
             mid = 1.0
         pending[:0] = [(a, mid), (mid, b)]
@@ -179,4 +193,5 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
         out.proved = True
     out.samples = sorted(cache)
     out.seconds = time.perf_counter() - t0
+    out.tau = tau
     return out

@@ -35,17 +35,19 @@ PREFIX = INERTIA
 ROUNDING = 16.0
 
 
+#: MUMPS settings under which PETSc asks it for the inertia: ICNTL(13) = 1 (no ScaLAPACK
+#: root) and ICNTL(24) = 1 (null pivot detection), required in parallel
+INERTIA_OPTIONS = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
+
+
 def inertia(A) -> tuple[int, int, int]:
     """``(negative, zero, positive)`` eigenvalue counts of the symmetric PETSc matrix A."""
     PETSc = import_petsc()
     ksp = PETSc.KSP().create(comm=A.getComm())
     try:
         ksp.setOperators(A)
-        # PETSc asks MUMPS for the inertia only with ICNTL(13) = 1 (no ScaLAPACK root) and
-        # ICNTL(24) = 1 (null pivot detection), required in parallel
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
-                    "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_13": 1,
-                    "mat_mumps_icntl_24": 1}
+                    "pc_factor_mat_solver_type": "mumps", **INERTIA_OPTIONS}
         with OptionsScope(PREFIX, defaults) as scope:
             scope.configure(ksp)
             ksp.setUp()
@@ -192,6 +194,13 @@ def _row_maxima(indptr: np.ndarray, data: np.ndarray) -> np.ndarray:
 
 def _diagonal_scale(diag: np.ndarray, rowmax: np.ndarray) -> np.ndarray:
     return np.where(diag != 0, np.abs(diag), rowmax)
+
+
+def diagonal_scale(A: sp.spmatrix) -> np.ndarray:
+    """``D`` of the rounding margin ``η·D`` for a SciPy matrix: |a_ii|, or the row's largest
+    |entry| where a_ii = 0."""
+    A = sp.csr_matrix(A)
+    return _diagonal_scale(A.diagonal(), _row_maxima(A.indptr, A.data))
 
 
 def _positive_definite(B) -> tuple[bool, str]:

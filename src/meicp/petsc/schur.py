@@ -171,6 +171,11 @@ class MumpsFactor:
 
     __call__ = solve
 
+    def inertia(self) -> tuple[int, int, int]:
+        """``(negative, zero, positive)`` pivots of the factor (Sylvester: the factored matrix's
+        eigenvalue counts); a factor made with :data:`~meicp.petsc.inertia.INERTIA_OPTIONS`."""
+        return tuple(int(c) for c in self.ksp.getPC().getFactorMatrix().getInertia())
+
     def __enter__(self):
         return self.solve
 
