@@ -252,3 +252,20 @@ def test_petsc_table_entries_no_solver_read_are_reported(tmp_path):
     wide.write_text(text.replace("nx = 5", "nx = 30"))
     out = run(meicp_cmd() + ["solve", str(wide), "--no-output", "-q", "--no-flutter"])
     assert "reached no PETSc solver" not in out.stderr, out.stderr
+
+
+def test_lcp_classify_and_eicp_json_write_non_finite_numbers_as_solve_json_does():
+    # lcp --json wrote ±inf as null (read as "unknown"); solve --json writes "inf"/"-inf"
+    # (float() reads them back) and NaN as null: one convention through json_number
+    import json
+
+    import numpy as np
+
+    from meicp.cli.lcp import _vector, json_plain
+
+    assert _vector(np.array([1.0, np.inf, -np.inf, np.nan])) == [1.0, "inf", "-inf", None]
+    doc = json_plain({"scale": np.float64(np.inf), "game": {"value": -np.inf, "x": (np.nan, 2)},
+                      "flag": np.bool_(True), "n": np.int64(3), "timings": {"t": 0.5}})
+    assert doc == {"scale": "inf", "game": {"value": "-inf", "x": [None, 2]}, "flag": True, "n": 3,
+                   "timings": {"t": 0.5}}
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc  # valid JSON, no Infinity/NaN tokens

@@ -247,3 +247,22 @@ def test_enumeration_with_a_nearly_singular_nondiagonal_B_misses_no_solution():
 def _within(xs, ys, rel=1e-9):
     """Every x of xs is within ``rel`` (relative, or absolute below 1) of some y of ys."""
     return all(any(abs(x - y) <= rel * max(1.0, abs(x)) for y in ys) for x in xs)
+
+
+def test_enumeration_by_name_is_refused_by_its_work_before_any_solve():
+    # 16 pairs passed the pair limit whatever the order: on order 400 that is 4.2e12 flops
+    # (hours); the budget refuses it at once, and an explicit max_j accepts the cost
+    from meicp.eicp import budget
+    from meicp.eicp.solve import auto_order
+    from meicp.eicp.problem import EiCPProblem
+
+    A, B, J = -np.eye(400), np.eye(400), np.arange(16)
+    with pytest.raises(ProblemError, match=r"\|J\| = 16, r = 400 is about 4\.2e\+12 flops .*max_j=16"):
+        meicp.solve_eicp(A, B, J=J, method="enumerate")
+    with pytest.raises(ProblemError, match="ENUMERATE_MAX_FLOPS"):
+        meicp.solve_eicp(A, B, J=J, all_solutions=True)
+    assert auto_order(EiCPProblem.from_data(A, B, J))[0] == "enumerate"  # auto's own choice unchanged
+    budget.check_enumeration_work(16, 312, "max_j")  # about an hour: accepted
+    with pytest.raises(ProblemError):
+        budget.check_enumeration_work(16, 313, "max_j")
+    assert budget.ENUMERATE_MAX_FLOPS * budget.SECONDS_PER_FLOP <= 1.2 * 3600

@@ -463,6 +463,10 @@ def _files(d: Path) -> dict:
            "zero.dat": _symlink(d / "zero.dat", "/dev/zero"),
            "two_layers.toml": ROOT / "data" / "scenes" / "two_layers.toml",
            "wide22.toml": _write(d / "wide22.toml", _two_layers(("nx = 5", "nx = 22"))),
+           # 16 pairs (within the pair limit) on 464 retained DOFs: 6.5e12 flops, hours
+           "deep16.toml": _write(d / "deep16.toml", _two_layers(("nx = 5", "nx = 16"), upper_rows=14)),
+           # 16 pairs on an order-400 pencil: 4.2e12 flops, hours
+           "eicp_deep16.h5": _h5(d / "eicp_deep16.h5", A=-np.eye(400), B=np.eye(400), J=np.arange(16)),
            # divergence born above σ = 0 near μ ≈ 494: no σ = 0 mode up to μ = 1000, μ_c = inf
            "born.toml": _write(d / "born.toml", _two_layers(("nx = 5", "nx = 6"), ("shear = 0.0", "shear = -0.5"),
                                                             ("friction = 3.0", "friction = 500.0"),
@@ -529,6 +533,14 @@ CLI_CASES = [
     ("solve-enumerate-22-pairs", ["solve", "{wide22.toml}", "--method", "enumerate", "-o", "{never}", "-q"], 2,
      r"meicp: error: method 'enumerate' visits all 2\^\|J\| supports: \|J\| = 22 complementarity pairs is "
      r"4,194,304 supports, past the limit of 16 pairs .*; use --method auto or --method active-set"),
+    # 16 pairs passed the pair limit whatever the order (hours to days); refused by work
+    ("solve-enumerate-16-pairs-deep", ["solve", "{deep16.toml}", "--method", "enumerate", "-o", "{never}", "-q"], 2,
+     r"meicp: error: method 'enumerate' solves 2\^\|J\| dense eigen-problems of order up to r: \|J\| = 16, "
+     r"r = 464 is about 6\.5e\+12 flops .* past the limit of 2e\+12 .*ENUMERATE_MAX_FLOPS\); use --method auto "
+     r"or --method active-set, .* max_j=16"),
+    ("eicp-enumerate-16-pairs-order-400", ["eicp", "{eicp_deep16.h5}", "--method", "enumerate"], 2,
+     r"\|J\| = 16, r = 400 is about 4\.2e\+12 flops \(2\^\|J\|·r³, ~2\.33 h on one core\), past the limit"),
+    ("eicp-all-16-pairs-order-400", ["eicp", "{eicp_deep16.h5}", "--all"], 2, r"r = 400 is about 4\.2e\+12 flops"),
     # μ_c = inf and an upper end inf were JSON null (unknown); "inf" as results.h5's float inf
     ("solve-critical-friction-inf-json", ["solve", "{born.toml}", "--critical-friction", "--json", "--no-output",
                                           "-q"], 0,

@@ -11,6 +11,7 @@ from ..eicp.solve import available_methods, solve_eicp
 from ..io.problem_files import read_problem
 from .arguments import cli_spelling, finite, tolerance, verbosity
 from .exit import Exit
+from .lcp import json_plain
 
 
 def register(sub) -> None:
@@ -37,9 +38,9 @@ def run(args) -> int:
     if args.json:
         rank0_print(json.dumps({
             "file": args.file, "method": r.method, "status": r.status, "success": r.success,
-            "message": cli_spelling(r.message), "iterations": r.iterations, "timings": r.timings,
-            "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
-                           "x": s.x.tolist()} for s in r.solutions],
+            "message": cli_spelling(r.message), "iterations": r.iterations, "timings": json_plain(r.timings),
+            "solutions": [json_plain({"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
+                                      "x": s.x.tolist()}) for s in r.solutions],
             "attempts": [[name, status, cli_spelling(message)] for name, status, message in r.attempts]},
             indent=2))
         return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED

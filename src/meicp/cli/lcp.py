@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 
+from ..contact.result import json_number
 from ..core.log import rank0_print
 from ..io.problem_files import read_problem
 from ..lcp.classes import MAX_EXACT_LIMIT, classify
@@ -34,13 +35,31 @@ def register(sub) -> None:
 
 
 def _number(v):
-    """A float for JSON; NaN and ±inf (not JSON) as None."""
-    v = float(v)
-    return v if np.isfinite(v) else None
+    """A float for JSON as ``meicp solve --json`` writes it (:func:`json_number`): ±inf as
+    "inf"/"-inf", NaN (unknown) as None."""
+    return json_number(v)
 
 
 def _vector(x):
     return None if x is None else [_number(v) for v in x]
+
+
+def json_plain(v):
+    """A JSON-ready value with every float through :func:`json_number` (``json.dumps``
+    would write NaN/Infinity, which is not JSON); dicts, lists and tuples walked."""
+    if isinstance(v, dict):
+        return {k: json_plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [json_plain(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return json_plain(v.tolist())
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return json_number(v)
+    return v
 
 
 def run_lcp(args) -> int:
@@ -54,7 +73,7 @@ def run_lcp(args) -> int:
             "residual": _number(r.residual), "min_x": _number(r.min_x), "min_w": _number(r.min_w),
             "complementarity": _number(r.complementarity), "x": _vector(r.x), "w": _vector(r.w),
             "solutions": [_vector(s) for s in r.solutions], "attempts": r.attempts,
-            "timings": r.timings}, indent=2))
+            "timings": json_plain(r.timings)}, indent=2))
     else:
         rank0_print(f"LCP from {args.file}: n = {np.size(data['q'])}")
         for name, status, message in (r.attempts if len(r.attempts) > 1 else []):
@@ -71,5 +90,5 @@ def run_lcp(args) -> int:
 def run_classify(args) -> int:
     data = read_problem(args.file, names=("M",))
     c = classify(data["M"], exact_limit=args.exact_limit)
-    rank0_print(json.dumps(c.to_dict(), indent=2, default=float) if args.json else c.report())
+    rank0_print(json.dumps(json_plain(c.to_dict()), indent=2, default=float) if args.json else c.report())
     return Exit.OK

@@ -18,6 +18,7 @@ from scipy.optimize import linprog
 
 from ..core.errors import ConvergenceError, ProblemError
 from ..core.machine import available_memory
+from ..eicp.enumeration import MAX_J
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..eicp.solve import solve_eicp
 from ..lattice.model import LatticeModel
@@ -295,7 +296,8 @@ def _smallest_mu_full(A1, B1, J, mu_max):
     if A1.shape[0] > ENUMERATE_N or J.size > ENUMERATE_J:
         raise ProblemError(f"critical_friction(condense=False) enumerates the whole reduced lattice: reduced size "
                            f"{A1.shape[0]} (limit {ENUMERATE_N}) / |J| = {J.size} (limit {ENUMERATE_J}) too large")
-    r = solve_eicp(A1.toarray(), B1.toarray(), J=J, method="enumerate", lam_min=0.0, tol=1e-9)
+    r = solve_eicp(A1.toarray(), B1.toarray(), J=J, method="enumerate", lam_min=0.0, tol=1e-9,
+                   max_j=MAX_J)  # sized by the check above, not by the by-name work budget
     mus = [s.lam for s in r.solutions if 0.0 <= s.lam <= mu_max]
     return min(mus) if mus else np.inf
 
@@ -376,8 +378,9 @@ def _smallest_mu_condensed(A1, B1, J, mu_max):
         log.info("critical_friction: %d free rows carry μ and stay in the condensed EiCP", Ac.shape[0] - Jc.size)
     # μ > 0 ⇔ ν = 1/μ > 0.  μ = 0 is never a solution: −Ac is positive semidefinite and
     # x_J ≥ 0 with xᵀ(−Ac)x = xᵀy = 0 only for x in its null space, excluded just above
+    # max_j: the caller sized this enumeration (enumeration_is_small), not the by-name budget
     r = solve_eicp(-Bc, -Ac, J=Jc, method="enumerate", lam_min=1.0 / mu_max if mu_max > 0 else np.inf,
-                   tol=1e-9)
+                   tol=1e-9, max_j=MAX_J)
     nus = [s for s in r.solutions if s.lam > 0 and 1.0 / s.lam <= mu_max]
     if not nus:
         return np.inf, bool(null.shape[1])
@@ -406,7 +409,7 @@ def _largest_sigma(K, M, sets, model, mu) -> float | None:
         if pen.A is None:
             continue  # every DOF held: no mode (as in analyze)
         A, B = pen.A.toarray(), pen.B.toarray()
-        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0)
+        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=MAX_J)  # internal: no budget
         if r.solutions:
             sigma = max(sol.lam for sol in r.solutions) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
             best = sigma if best is None else max(best, sigma)

@@ -3,7 +3,8 @@ modes with σ ≥ 0, or a proof that none exists, or *undecided* with what was e
 
 Small reduced problems are enumerated (every support: the modes, or a proof of none); an
 enumeration asked for by name is refused past ``ENUMERATE_J`` pairs unless ``max_j`` raises
-the limit (:func:`check_enumeration_size`).  Larger ones are decided, cheapest first:
+the limit, or past ``ENUMERATE_MAX_FLOPS`` of work (2^|J|·r³, about an hour) unless ``max_j``
+is given (:func:`check_enumeration_size`).  Larger ones are decided, cheapest first:
 
 1. **Rayleigh bound at 0** — complementarity gives ``xᵀw = 0``, so every solution has
    ``σ = xᵀsym(A)x / xᵀsym(B)x``: ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` (LDLᵀ inertias with a
@@ -44,6 +45,7 @@ import numpy as np
 
 from ..core.errors import ProblemError
 from ..core.validation import as_int
+from ..eicp.budget import check_enumeration_work
 from ..eicp.problem import MAX_ENUMERATED, lam_floor
 from ..eicp.solve import solve_eicp
 from ..petsc.inertia import rayleigh_bound, symmetric_part_definite
@@ -59,7 +61,9 @@ from .result import Mode
 #: reduced problems are enumerated when 2^|J| dense eigen-solves of size r cost at most
 #: about this many flops (2^|J|·r³), with r ≤ ENUMERATE_N and |J| ≤ ENUMERATE_J.  ENUMERATE_J
 #: also bounds ``method="enumerate"`` asked for by name (unless ``max_j`` raises it): 22
-#: pairs on 110 retained DOFs measured 3.4 h, and hours grow to days with the lattice
+#: pairs on 110 retained DOFs measured 3.4 h, and hours grow to days with the lattice; the
+#: work of one by name is bounded too (meicp.eicp.budget.ENUMERATE_MAX_FLOPS: 16 pairs on
+#: 2,000 retained DOFs are days)
 ENUMERATE_FLOPS = 2e9
 ENUMERATE_N = 600
 ENUMERATE_J = 16
@@ -90,13 +94,17 @@ def enumeration_is_small(r: int, n_j: int) -> bool:
     return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
 
 
-def check_enumeration_size(n_j: int, options: dict) -> None:
-    """ProblemError when an enumeration of 2^n_j supports is past the limit: ENUMERATE_J
-    pairs, or the ``max_j`` keyword's (at most MAX_ENUMERATED) when the caller raised it.
-    The error names the limit and the methods that decide past it."""
+def check_enumeration_size(n_j: int, r: int, options: dict) -> None:
+    """ProblemError when an enumeration of 2^n_j supports of order up to r is past the
+    limit: ENUMERATE_J pairs, or the ``max_j`` keyword's (at most MAX_ENUMERATED) when the
+    caller raised it; and, unless ``max_j`` was given (the caller then accepts the cost),
+    ENUMERATE_MAX_FLOPS of work.  The error names the limit and the methods that decide
+    past it."""
     given = options.get("max_j")
     limit = ENUMERATE_J if given is None else as_int(given, "max_j", minimum=0, maximum=MAX_ENUMERATED)
     if n_j <= limit:
+        if given is None:  # the pair count is not the work: 16 pairs on 2,000 DOFs are days
+            check_enumeration_work(n_j, r, f"analyze(..., max_j={max(n_j, 1)}) from Python")
         return
     name = (f"max_j = {limit}" if given is not None
             else f"the limit of {limit} pairs ({2 ** limit:,} supports, meicp.contact.divergence.ENUMERATE_J)")
@@ -118,7 +126,7 @@ def divergence_of(pen: Pencil, scene: Scene, comm, method, lam_min: float, tol: 
     if chosen == "active-set":
         return _window_verdict(pen, scene, comm, lam_min, tol, options)
     if chosen == "enumerate":  # before any work: an enumeration by name may not start a days-long run
-        check_enumeration_size(int(red.J.size), options)
+        check_enumeration_size(int(red.J.size), int(red.retained.size), options)
     kwargs = dict(options)
     eicp = solve_eicp(pen.A, pen.B, J=red.J, method=chosen, lam_min=0.0, tol=tol, comm=comm, **kwargs)
     modes, found, left_out = _modes(eicp, pen, lam_min)

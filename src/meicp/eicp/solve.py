@@ -23,6 +23,7 @@ from ..core.validation import is_symmetric
 from ..petsc.comm import mpi_comm
 from ..petsc.options import PetscOptionError
 from .active_set import active_set
+from .budget import check_enumeration_work
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
@@ -61,8 +62,9 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     A, B: NumPy, SciPy sparse, or PETSc Mat (collective on its communicator).  J: the
     complementarity indices (default all: the EiCP).  all_solutions: enumerate every
     solution (small |J| only).  lam_min: only solutions with λ ≥ lam_min.  tol: relative
-    certificate tolerance.  comm: split the enumeration across its ranks.  Other keywords
-    go to the method (``target``, ``nev``, ``max_iter``, ``options``...; ``auto`` hands them
+    certificate tolerance.  comm: split the enumeration across its ranks.  ``enumerate``
+    (by name or all_solutions) is refused before any work past ``budget.ENUMERATE_MAX_FLOPS``
+    (about an hour) unless ``max_j`` is given.  Other keywords go to the method (``target``, ``nev``, ``max_iter``, ``options``...; ``auto`` hands them
     to every method it runs).  ``method="auto"`` runs the portfolio of :func:`auto_order`
     and records each method's outcome in ``result.attempts``; ``result.method`` names the
     one that answered.  Every returned solution passed its certificate; see
@@ -79,6 +81,11 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
         method = "enumerate"
     if method != "auto" and method not in SOLVERS:
         raise SolverNotFound(method, available_methods())
+    if method == "enumerate" and "max_j" not in kwargs:
+        # before any work: by name (or all_solutions) it may not start a days-long run; an
+        # explicit max_j is the caller's own bound and accepts the cost
+        check_enumeration_work(int(problem.J.size), int(problem.n),
+                               f"solve_eicp(..., max_j={max(int(problem.J.size), 1)}) from Python")
     comm = mpi_comm(problem.A.getComm() if problem.distributed and comm is None else comm)
     t0 = time.perf_counter()
     kw = dict(kwargs, tol=tol, lam_min=lam_min, comm=comm)
