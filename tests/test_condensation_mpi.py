@@ -47,6 +47,9 @@ def test_proofs_agree_with_serial(method):
         assert par.proved is ser.proved is proved
         assert par.test == ser.test and par.window == ser.window
         assert par.margin == pytest.approx(ser.margin, rel=1e-6, abs=1e-9)
+        # the same windows and τ (the Schur path sharpens τ on request, served to rank 1 like a σ)
+        assert par.statement.split(";")[0] == ser.statement.split(";")[0]
+        assert ("tau" in par.seconds) == ("tau" in ser.seconds) == (method == "schur" and proved)
 
 
 def test_critical_friction_bracket_on_two_ranks_matches_serial():
