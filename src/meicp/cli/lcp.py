@@ -34,14 +34,10 @@ def register(sub) -> None:
     p.set_defaults(run=run_classify)
 
 
-def _number(v):
-    """A float for JSON as ``meicp solve --json`` writes it (:func:`json_number`): ±inf as
-    "inf"/"-inf", NaN (unknown) as None."""
-    return json_number(v)
-
-
 def _vector(x):
-    return None if x is None else [_number(v) for v in x]
+    """A vector for JSON as ``meicp solve --json`` writes numbers (:func:`json_number`): ±inf as
+    "inf"/"-inf", NaN (unknown) as None."""
+    return None if x is None else [json_number(v) for v in x]
 
 
 def json_plain(v):
@@ -70,8 +66,8 @@ def run_lcp(args) -> int:
         rank0_print(json.dumps({
             "file": args.file, "n": int(np.size(data["q"])), "method": r.method, "status": r.status,
             "success": r.success, "message": r.message, "iterations": r.iterations,
-            "residual": _number(r.residual), "min_x": _number(r.min_x), "min_w": _number(r.min_w),
-            "complementarity": _number(r.complementarity), "x": _vector(r.x), "w": _vector(r.w),
+            "residual": json_number(r.residual), "min_x": json_number(r.min_x), "min_w": json_number(r.min_w),
+            "complementarity": json_number(r.complementarity), "x": _vector(r.x), "w": _vector(r.w),
             "solutions": [_vector(s) for s in r.solutions], "attempts": r.attempts,
             "timings": json_plain(r.timings)}, indent=2))
     else:

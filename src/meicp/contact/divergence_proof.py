@@ -137,9 +137,9 @@ def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=No
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])
+        split = f", split at the scale {scale:.3g}" if scale and scale > cov.tau else ""
         return (True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] ({len(cov.windows)} "
-                f"windows, {n} condensations, τ = {cov.tau:.3g} certified"
-                + (f", split at the scale {scale:.3g}" if scale and scale > cov.tau else "") + ")", margin, n, (0.0, float(sigma_max)))
+                f"windows, {n} condensations, τ = {cov.tau:.3g} certified{split})", margin, n, (0.0, float(sigma_max)))
     covered = 0.0
     for a, b, *_ in sorted(cov.windows):
         if a <= covered:

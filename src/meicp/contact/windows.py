@@ -119,14 +119,14 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
     estimate of λ_min, certified or not: it moves the samples, not the bounds).  ``sharper_tau()``:
     certifies a larger τ (e.g. ``scale``) at the cost of a factorisation, returning it (or the
     old τ); called at most once, before the first chord it would tighten by a tenth or more.
-    ``d_seed``: the starting scaling of every
-    sample's optimisation (e.g. the critical-friction bracket's D, near-optimal at σ = 0).  The first windows split [0, σ_max] uniformly
-    in log(σ + τ) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
-    split at the geometric mean of its σ + τ ends, until ``max_samples`` condensations.
+    ``d_seed``: the starting scaling of every sample's optimisation (e.g. the critical-friction
+    bracket's D, near-optimal at σ = 0).  The first windows split [0, σ_max] uniformly in
+    log(σ + scale) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
+    split at the geometric mean of its σ + scale ends, until ``max_samples`` condensations.
     """
     t0 = time.perf_counter()
     cache, d_cache = {}, {}
-    s_split = tau if scale is None or not scale > tau else scale
+    s_split = max(tau, scale) if scale else tau
 
     def at(s):
         if s not in cache:
