@@ -201,3 +201,25 @@ def test_the_friction_range_on_300_sliding_base_contacts():
     for mu, proved in ((0.999 * mu_r, True), (1.2 * mu_r, False)):
         with pencil(_scene(300, (4, 4), "slip+", mu)) as pen:
             assert (rayleigh_bound(pen.A, pen.B).proved is True) is proved
+
+
+@pytest.mark.parametrize("state, mu, mode", [("slip+", 1.0, False), ("slip-", 3.0, True)])
+def test_the_first_search_gives_up_only_where_no_ritz_value_shows_above_zero(state, mu, mode):
+    """The first search's stopping test (divergence.FIRST_GIVE_UP): on a stable lattice every
+    Ritz value sits in the slow vibrations below 0 and the eigen-solve stops after two
+    restarts instead of its six; where a mode exists it shows above 0 at once and is found."""
+    from meicp.contact.problem import pencil
+    from meicp.petsc.window import rayleigh_estimate
+
+    with pencil(_scene(200, (20, 20), state, mu)) as pen:  # tall enough for a cluster of slow vibrations
+        theta = rayleigh_estimate(pen.A, pen.B, max_it=divergence.PROBE_RESTARTS)[0]
+        kw = dict(J=pen.maps.J, method="active-set", lam_min=0.0, target=1.001 * theta, nev=1, max_iter=1,
+                  options={"eps_max_it": divergence.FIRST_EPS_MAX_IT})
+        eager = meicp.solve_eicp(pen.A, pen.B, give_up_after=divergence.FIRST_GIVE_UP, **kw)
+        patient = meicp.solve_eicp(pen.A, pen.B, **kw)
+    assert bool(eager.solutions) is mode and bool(patient.solutions) is mode
+    if mode:
+        assert eager.coverage["gave_up"] == 0 and np.isclose(eager.solutions[0].lam, patient.solutions[0].lam)
+    else:
+        assert eager.coverage["gave_up"] == 1 and eager.coverage["eps_iterations"] == divergence.FIRST_GIVE_UP + 1
+        assert patient.coverage["eps_iterations"] == divergence.FIRST_EPS_MAX_IT
