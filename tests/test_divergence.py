@@ -30,20 +30,46 @@ def test_stable_by_the_rayleigh_bound_past_16_contacts():
 
 def test_the_full_support_mode_is_found_from_the_top_of_the_window():
     """nx = 60, 2 + 2 rows, slip−, μ = 3: the full support carries σ = 0.8188 (before:
-    cycling among the slow vibrations nearest 0)."""
+    cycling among the slow vibrations nearest 0), found by the first search from the short
+    Lanczos run's estimate of the top: no σ-window is certified for a mode."""
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
     assert r.divergence is True and np.isclose(r.modes[0].sigma, 0.818755, rtol=1e-5)
     assert r.modes[0].residual < 1e-10 and r.proofs[0]["test"] == "certified-mode"
-    lo, hi = r.proofs[0]["sigma_window"]
-    assert lo == 0.0 and hi > r.modes[0].sigma
+    assert r.proofs[0]["sigma_window"] is None and r.proofs[0]["eigen_solves"] <= divergence.FIRST_SEARCH
+    shift = float(r.evidence.split("search from σ = ")[1].split(":")[0])
+    assert shift > r.modes[0].sigma
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():
-    """nx = 60, slip−, μ = 1.2 (below μ_c ≈ 1.46): sym(−A) is indefinite; the σ-window
-    [0, σ_max] is certified free of modes by the condensed tests."""
+    """nx = 60, slip−, μ = 1.2 (below μ_c ≈ 1.46): sym(−A) is indefinite; the condensed
+    tests prove every σ ≥ 0 free of modes, with no σ-window certified."""
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
-    assert r.divergence is False
-    assert r.proofs[0]["test"].startswith("rayleigh-window+condensed") and "σ_max" in r.evidence
+    assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
+    assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "σ_max" not in r.evidence
+
+
+@pytest.mark.parametrize("reach, divergence_verdict", [(50.0, False), (1e-3, None)])
+def test_a_proof_stopped_short_of_infinity_is_completed_by_the_sigma_window(monkeypatch, reach, divergence_verdict):
+    """Where the condensed proof covers only [0, c] (here: the real proof on [0, c], reported
+    as stopped there), the certified σ_max of (sym A, sym B) completes it when σ_max ≤ c —
+    and only then: with c below σ_max the verdict stays undecided, saying what was proved."""
+    from meicp.contact.divergence_proof import DivergenceProof
+
+    real = divergence.prove_no_divergence
+
+    def stopped_at_reach(comm, pen, sigma_max, **kw):
+        p = real(comm, pen, reach, **kw)
+        assert p.proved and p.window == (0.0, reach)
+        return DivergenceProof(False, "", f"window [{reach}, inf] not certified", -1.0, p.samples, p.window)
+
+    monkeypatch.setattr(divergence, "prove_no_divergence", stopped_at_reach)
+    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
+    assert r.divergence is divergence_verdict
+    if divergence_verdict is False:
+        assert r.proofs[0]["test"] == "rayleigh-window+condensed-windows" and "σ_max" in r.evidence
+        assert 0 < r.proofs[0]["sigma_window"][1] <= reach
+    else:
+        assert r.proofs[0]["sigma_window"] == (0.0, reach) and "undecided" in r.evidence
 
 
 def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monkeypatch):
@@ -175,3 +201,25 @@ def test_the_friction_range_on_300_sliding_base_contacts():
     for mu, proved in ((0.999 * mu_r, True), (1.2 * mu_r, False)):
         with pencil(_scene(300, (4, 4), "slip+", mu)) as pen:
             assert (rayleigh_bound(pen.A, pen.B).proved is True) is proved
+
+
+@pytest.mark.parametrize("state, mu, mode", [("slip+", 1.0, False), ("slip-", 3.0, True)])
+def test_the_first_search_gives_up_only_where_no_ritz_value_shows_above_zero(state, mu, mode):
+    """The first search's stopping test (divergence.FIRST_GIVE_UP): on a stable lattice every
+    Ritz value sits in the slow vibrations below 0 and the eigen-solve stops after two
+    restarts instead of its six; where a mode exists it shows above 0 at once and is found."""
+    from meicp.contact.problem import pencil
+    from meicp.petsc.window import rayleigh_estimate
+
+    with pencil(_scene(200, (20, 20), state, mu)) as pen:  # tall enough for a cluster of slow vibrations
+        theta = rayleigh_estimate(pen.A, pen.B, max_it=divergence.PROBE_RESTARTS)[0]
+        kw = dict(J=pen.maps.J, method="active-set", lam_min=0.0, target=1.001 * theta, nev=1, max_iter=1,
+                  options={"eps_max_it": divergence.FIRST_EPS_MAX_IT})
+        eager = meicp.solve_eicp(pen.A, pen.B, give_up_after=divergence.FIRST_GIVE_UP, **kw)
+        patient = meicp.solve_eicp(pen.A, pen.B, **kw)
+    assert bool(eager.solutions) is mode and bool(patient.solutions) is mode
+    if mode:
+        assert eager.coverage["gave_up"] == 0 and np.isclose(eager.solutions[0].lam, patient.solutions[0].lam)
+    else:
+        assert eager.coverage["gave_up"] == 1 and eager.coverage["eps_iterations"] == divergence.FIRST_GIVE_UP + 1
+        assert patient.coverage["eps_iterations"] == divergence.FIRST_EPS_MAX_IT

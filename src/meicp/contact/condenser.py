@@ -29,6 +29,7 @@ import scipy.sparse as sp
 
 from ..core.threads import dense_phase
 from ..lattice.assembly import assemble_scipy
+from ..lattice.node_blocks import NodeBlocks, node_of
 from ..petsc.eigen import solve_ghep
 from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy
@@ -62,6 +63,11 @@ class Condenser:
         self.comm = comm
         self.pieces: PencilPieces = pieces_of(K, M, maps, friction=friction)
         F, J = self.pieces.F, self.pieces.J
+        # MUMPS orders whole nodes only when their DOFs share a pattern (lattice.node_blocks):
+        # one padding for H_FF (every σ), one for the bordered matrix (its |J| extra rows alone)
+        nodes = node_of(maps.retained)
+        self.pad_FF = NodeBlocks(nodes[F]).pad
+        self.pad_bordered = NodeBlocks(np.concatenate([nodes, nodes.max(initial=-1) + 1 + np.arange(J.size)])).pad
         if method == "auto":
             method = "solves" if F.size * J.size <= SOLVES_LIMIT and self._diagonal_FF() else "schur"
         self.method = method
@@ -110,10 +116,10 @@ class Condenser:
             if F.size == 0:
                 self.tau, self.ready, self.why = np.inf, True, ""
             elif self.method == "solves":
-                self.tau, self.why = certified_tau(self.comm, KFF, MFF)
+                self.tau, self.why = certified_tau(self.comm, KFF, MFF, pad=self.pad_FF)
                 self.ready = self.tau is not None
             else:
-                factor, self.tau, self.why = held_factor(self.comm, KFF, MFF)
+                factor, self.tau, self.why = held_factor(self.comm, KFF, MFF, pad=self.pad_FF)
                 self.ready = factor is not None
                 if self.ready and need_tau:
                     self.tau_scale = max(self.tau, 0.5 * estimate_lambda_min(factor, MFF))
@@ -121,7 +127,7 @@ class Condenser:
             if self.ready and self.method == "schur":
                 t = time.perf_counter()
                 solve = refined_solve(factor, KFF)
-                self.relative_error, X = schur_error(self.comm, self.pieces, solve)
+                self.relative_error, X = schur_error(self.comm, self.pieces, solve, pad=self.pad_bordered)
                 if keep_factor:
                     self._factor0, self._solve0, factor = factor, solve, None
                 self._schur0 = from_bordered_schur(self.pieces, 0.0, X, self.relative_error)
@@ -139,7 +145,7 @@ class Condenser:
             t = time.perf_counter()
             F = self.pieces.F
             if not tau_inertia(self.comm, self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr(),
-                               self.tau_scale):
+                               self.tau_scale, pad=self.pad_FF):
                 self.tau = self.tau_scale
             self.seconds["tau"] = time.perf_counter() - t
         return self.tau
@@ -147,12 +153,12 @@ class Condenser:
     def at(self, sigma: float, *, xi: bool = True) -> Condensed:
         """G(σ) = S + R (and the Ξ blocks) with its error.  Collective."""
         if self.method == "solves":
-            return condense(self.pieces, sigma, mumps_factor(self.comm), tau=self.tau, xi=xi)
+            return condense(self.pieces, sigma, lambda H: mumps_factor(self.comm)(self.pad_FF(H)), tau=self.tau, xi=xi)
         if sigma == 0 and self._schur0 is not None:
             return self._schur0
         H, rows = self.pieces.bordered(sigma)
-        return from_bordered_schur(self.pieces, sigma, dense_schur(self.comm, H, rows, symmetric=True),
-                                   self.relative_error)
+        X = dense_schur(self.comm, self.pad_bordered(H), rows, symmetric=True)
+        return from_bordered_schur(self.pieces, sigma, X, self.relative_error)
 
     def error_text(self) -> str:
         if self.method == "solves":
@@ -166,19 +172,21 @@ class Condenser:
         if sigma == 0 and self._factor0 is not None:
             return nullcontext(self._solve0)
         F = self.pieces.F
-        return MumpsFactor(self.comm, (sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F], symmetric=True)
+        return MumpsFactor(self.comm, self.pad_FF((sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F]), symmetric=True)
 
 
-def held_factor(comm, KFF, MFF) -> tuple[MumpsFactor | None, float | None, str]:
+def held_factor(comm, KFF, MFF, *, pad=None) -> tuple[MumpsFactor | None, float | None, str]:
     """One MUMPS LDLᵀ of K̃_FF − 2η·D (D = diag|K̃_FF|, η the rounding margin of
     :func:`~meicp.petsc.inertia.rounding_margin`) and the proof its inertia gives: every pivot
     positive means K̃_FF − 2ηD ≻ 0 up to the factorisation's rounding (one η), so K̃_FF ≻ ηD ≻ 0
     — the lattice is held once the contact DOFs are — and, with a diagonal M̃_FF,
     τ = η·min(D/M̃_FF) ≤ λ_min(K̃_FF, M̃_FF).  Returns ``(factor, τ, "")`` (τ 0 for a
-    non-diagonal mass), or ``(None, None, why)`` when not proved (the factor destroyed)."""
+    non-diagonal mass), or ``(None, None, why)`` when not proved (the factor destroyed).
+    ``pad``: the factored matrix padded to node blocks first (:mod:`meicp.lattice.node_blocks`)."""
     eta = rounding_margin(KFF.shape[0])
     d = diagonal_scale(KFF)
-    factor = MumpsFactor(comm, (KFF - sp.diags(2 * eta * d)).tocsr(), symmetric=True, options=INERTIA_OPTIONS)
+    shifted = (KFF - sp.diags(2 * eta * d)).tocsr()
+    factor = MumpsFactor(comm, shifted if pad is None else pad(shifted), symmetric=True, options=INERTIA_OPTIONS)
     negative, zero, _ = factor.inertia()
     if negative or zero:
         factor.destroy()
@@ -221,12 +229,13 @@ def refined_solve(factor: MumpsFactor, KFF, steps: int = REFINE_STEPS):
     return solve
 
 
-def certified_tau(comm, KFF, MFF) -> tuple[float | None, str]:
+def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
     """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
     use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
     (:func:`~meicp.petsc.inertia.pencil_is_negative`), which also proves K̃_FF ≻ 0.
     ``(None, why)`` when not certified."""
-    with destroying(mat_from_scipy(comm, KFF), mat_from_scipy(comm, MFF)) as (Kp, Mp):
+    pad = pad or (lambda H: H)
+    with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
         try:
             # half the estimate is certified below: a loose tolerance, a short basis and no
             # purification of the vector are enough (3·10⁵ DOFs: 0.47 s instead of 1.17 s)
@@ -241,27 +250,29 @@ def certified_tau(comm, KFF, MFF) -> tuple[float | None, str]:
             return None, (f"K̃_FF is not positive definite (λ_min ≈ {est:.2e}): the lattice is not held once the "
                           "contact DOFs are, the condensation is undefined")
     tau = 0.5 * est
-    why = tau_inertia(comm, KFF, MFF, tau)
+    why = tau_inertia(comm, KFF, MFF, tau, pad=pad)
     return (tau, "") if not why else (None, why)
 
 
-def tau_inertia(comm, KFF, MFF, tau: float) -> str:
+def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
     """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`)
     proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  Collective."""
-    with destroying(mat_from_scipy(comm, (tau * MFF - KFF).tocsr()), mat_from_scipy(comm, MFF)) as (Ap, Mp):
+    shifted = (tau * MFF - KFF).tocsr()
+    shifted = shifted if pad is None else pad(shifted)
+    with destroying(mat_from_scipy(comm, shifted), mat_from_scipy(comm, MFF)) as (Ap, Mp):
         sign = pencil_is_negative(Ap, Mp, symmetric=True)  # K̃_FF symmetrised, M̃_FF = Q̃ᵀMQ̃
     if sign is None or sign.proved is not True:
         return f"τ = {tau:.3e} ≤ λ_min(K̃_FF, M̃_FF) not certified ({'' if sign is None else sign.reason})"
     return ""
 
 
-def schur_error(comm, pieces: PencilPieces, solve_KFF) -> tuple[float, np.ndarray]:
+def schur_error(comm, pieces: PencilPieces, solve_KFF, *, pad=None) -> tuple[float, np.ndarray]:
     """MUMPS' Schur complement X of the σ = 0 bordered matrix and its relative error, measured
     along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from
     ``solve_KFF`` (a separate factor of K̃_FF); charged ×PROBE_SAFETY, at least
     SCHUR_ERROR_FLOOR.  Returns ``(relative error, X)``."""
     H, rows = pieces.bordered(0.0)
-    X = dense_schur(comm, H, rows, symmetric=True)
+    X = dense_schur(comm, H if pad is None else pad(H), rows, symmetric=True)
     G = from_bordered_schur(pieces, 0.0, X, 0.0).G()
     J, F = pieces.J, pieces.F
     rng = np.random.default_rng(14)

@@ -10,23 +10,24 @@ is given (:func:`check_enumeration_size`).  Larger ones are decided, cheapest fi
    ``σ = xᵀsym(A)x / xᵀsym(B)x``: ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` (LDLᵀ inertias with a
    margin above rounding, :func:`meicp.petsc.inertia.rayleigh_bound`) proves that no σ ≥ 0
    exists.  One factorisation; it holds for any pencil, interfaces included.  Not tried
-   when a short Lanczos run of step 2's estimate, made first, has a Ritz value θ > 0: θ is
+   when a short Lanczos run on (sym A, sym B), made first, has a Ritz value θ > 0: θ is
    itself a Rayleigh quotient, so sym(A) is not negative definite.
-2. **The σ-window** ``[0, σ_max]``: ``σ_max`` placed by Lanczos on ``(sym A, sym B)``
-   (:func:`meicp.petsc.window.rayleigh_estimate`) and certified by the same bound at
-   ``τ = σ_max`` (no solution above it).  It also bounds the real part of every eigenvalue
-   of every support's pencil.  Not looked for when the short run found no Ritz value above 0
-   (and the bound at 0 failed): the top then sits in the cluster of slow vibrations, where
-   Lanczos stalls.
-3. **Modes from the top**: the SLEPc active-set search (:mod:`meicp.eicp.active_set`) with
-   its shift at σ_max, so the first pair it takes is the rightmost eigenvalue of the full
-   support S = J — never the slow vibrations clustered just below 0 that a shift at 0
-   returns — and each support update follows that pair.  A returned mode is certified on
-   the whole reduced problem.  First a short search (``FIRST_SEARCH`` support updates).
-4. **Condensed proof**: no mode found ⇒ ``G(σ) ∈ R₀`` on every window of ``[0, σ_max]``
-   (:func:`meicp.contact.divergence_proof.prove_no_divergence`), or of ``[0, ∞)`` when no
-   σ_max was certified (Lanczos stalls when the top of ``sym(A)`` sits in the cluster of
-   slow vibrations of a tall lattice).  Not proved: the search again, with its whole budget.
+2. **Modes from the top**: the SLEPc active-set search (:mod:`meicp.eicp.active_set`) with
+   its shift at the short run's estimate θ of λ_max(sym A, sym B) — it bounds the real part
+   of every eigenvalue of every support's pencil — so the first pair it takes is the
+   rightmost eigenvalue of the full support S = J, never the slow vibrations clustered just
+   below 0 that a shift at 0 returns; each support update follows that pair.  A returned
+   mode is certified on the whole reduced problem.  First a short search (``FIRST_SEARCH``
+   support updates, ``FIRST_EPS_MAX_IT`` restarts each), given up after ``FIRST_GIVE_UP``
+   restarts when every Ritz value estimates an eigenvalue below 0.
+3. **Condensed proof**: no mode found ⇒ ``G(σ) ∈ R₀`` on every window of ``[0, ∞)``
+   (:func:`meicp.contact.divergence_proof.prove_no_divergence`).
+4. **The σ-window**, only where that proof stopped at some σ = c: ``σ_max`` placed by Lanczos
+   on ``(sym A, sym B)`` (:func:`meicp.petsc.window.rayleigh_estimate`) and certified by the
+   bound of step 1 at ``τ = σ_max`` (no solution above it); ``σ_max ≤ c`` completes the
+   proof.  Not looked for when the short run found no Ritz value above 0 (the top then sits
+   in the cluster of slow vibrations, where Lanczos stalls).  Otherwise the search again,
+   from σ_max, with its whole budget.
 5. Otherwise **undecided**, saying what was proved: the window, the supports visited, why
    each proof stopped, and the friction up to which these contact states are proved free
    of divergence (:mod:`.friction_range`: the Rayleigh bound along μ).
@@ -84,6 +85,12 @@ WINDOW_TRIES = 3
 #: no mode, and a stable lattice spends the whole budget here
 FIRST_SEARCH = 3
 FIRST_EPS_MAX_IT = 6
+#: ... and it gives up after this many restarts when every Ritz value estimates an eigenvalue
+#: below 0: on a stable lattice all sit in the cluster of slow vibrations from the first
+#: restart on (10⁶ DOFs, slip+ μ = 1: the largest −6e-5 in all six restarts, 18 s of
+#: solves), while a mode shows above 0 at once (slip− μ = 3: σ = 0.32552 after the first
+#: restart, converged in the fourth); the proof, or the whole search after it, decides
+FIRST_GIVE_UP = 1
 
 log = logging.getLogger("meicp")
 
@@ -178,39 +185,26 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
             return [], text, True, None, dict(proof, test="rayleigh-inertia", statement=text,
                                               sigma_window=(0.0, math.inf))
         stopped = [f"Rayleigh bound at 0: {at_zero.reason}"]
-    # the whole Lanczos run only after a positive Ritz value: with none in the short run the top
-    # sits in the cluster of slow vibrations (the bound at 0 just failed on it) and the run stalls
-    # for its whole budget (8.8 s at 10⁶ DOFs, slip+ μ = 0.1) — the proof then covers [0, ∞)
+    # 3. modes from the estimated top of the σ-window: a short search first (a mode on the full
+    # support, or one support update away, is found at once), then the condensed proof, then —
+    # neither decided — the whole search; on a stable lattice a long search finds nothing and
+    # costs more than the proof (10⁶ DOFs, slip+, μ = 1: 273 s of search, 76 s of proof).  The
+    # top is the short run's Ritz value: placing the shift needs no certificate, and the proof
+    # needs σ_max only where it stops short of ∞ (step 5)
     stalls = not theta > RITZ_POSITIVE * scale
-    if b_definite and not converged and not stalls:
-        theta, converged = rayleigh_estimate(A, B)[:2]
-    # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
-    sigma_max = _certified_top(A, B, theta, scale) if converged else None
-    log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
-             time.perf_counter() - t0)
-    if sigma_max is None:
-        stopped.append("no σ-window (λ_max(sym A, sym B) not estimated)" if not math.isfinite(theta) else
-                       f"no σ_max: no Ritz value of (sym A, sym B) above 0 in {PROBE_RESTARTS} Lanczos restarts "
-                       f"(largest {theta:.6g}; the top lies among the slow vibrations, where Lanczos stalls)"
-                       if stalls and not converged else
-                       f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)")
-    # 3. modes from the top: a short search first (a mode on the full support, or one
-    # support update away, is found at once), then the condensed proof, then — neither
-    # decided — the whole search; on a stable lattice a long search finds nothing and costs
-    # more than the proof (10⁶ DOFs, slip+, μ = 1: 273 s of search, 76 s of proof)
     solver = scene.solver
     kwargs = dict(options)
-    top = sigma_max if sigma_max is not None else max(theta if math.isfinite(theta) else 0.0, 0.0) * 1.001 + 1e-10 * scale
+    top = max(theta if math.isfinite(theta) else 0.0, 0.0) * 1.001 + 1e-10 * scale
     kwargs.setdefault("target", top)
     kwargs.setdefault("nev", solver.nev or 1)
     kwargs.setdefault("options", petsc_options)
     full_budget = kwargs.pop("max_iter", solver.max_iterations or None)
-    window = f"[0, {sigma_max:.6g}]" if sigma_max is not None else "[0, σ_max unknown]"
 
     def search(max_iter, first=False):
         budget = {} if max_iter is None else {"max_iter": max_iter}
         if first:
             budget["options"] = {"eps_max_it": FIRST_EPS_MAX_IT, **kwargs["options"]}
+            budget["give_up_after"] = FIRST_GIVE_UP
         eicp = solve_eicp(A, B, J=red.J, method="active-set", lam_min=0.0, tol=tol, comm=comm,
                           **{**kwargs, **budget})
         if eicp.coverage.get("option_error"):  # a [petsc] / command-line value PETSc rejects: bad input
@@ -218,38 +212,57 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
         proof["supports_visited"] += int(eicp.coverage.get("supports_visited", 0))
         proof["eigen_solves"] += int(eicp.coverage.get("eigen_solves", 0))
         modes, found, left_out = _modes(eicp, pen, lam_min)
-        log.info("divergence: search from σ = %.6g, %d mode(s), %s Krylov–Schur restart(s) (%.2f s)", top, len(found),
-                 eicp.coverage.get("eps_iterations", "?"), time.perf_counter() - t0)
+        log.info("divergence: search from σ = %.6g, %d mode(s), %s Krylov–Schur restart(s)%s (%.2f s)",
+                 kwargs["target"], len(found), eicp.coverage.get("eps_iterations", "?"),
+                 ", given up: no Ritz value above 0" if eicp.coverage.get("gave_up") else "", time.perf_counter() - t0)
         if not found:
             return eicp, None
-        text = (f"search from the top of the σ-window {window}: a certified divergence mode after "
+        text = (f"search from σ = {kwargs['target']:.6g}: a certified divergence mode after "
                 f"{proof['eigen_solves']} eigen-solve(s), {proof['supports_visited']} support(s){left_out}")
-        return eicp, (modes, text, False, eicp, dict(proof, test="certified-mode", statement=text,
-                                                      sigma_window=(0.0, sigma_max)))
+        return eicp, (modes, text, False, eicp, dict(proof, test="certified-mode", statement=text))
 
     short = FIRST_SEARCH if full_budget is None else min(FIRST_SEARCH, full_budget)
     eicp, verdict = search(short, first=True)
     if verdict is not None:
         return verdict
-    # 4. condensed proof on the certified window; without one (the top of sym(A) in the
-    # cluster of slow vibrations, where Lanczos stalls) on [0, ∞): its last window [σ_a, ∞)
-    # costs one condensation more, far less than locating the top (spectrum slicing took
-    # 175 s at 3·10⁵ DOFs where the whole proof on [0, ∞) takes 16 s)
-    upper = sigma_max if sigma_max is not None else math.inf
-    condensed = prove_no_divergence(comm, pen, upper, tol=tol)
+    # 4. condensed proof on [0, ∞): its last window [σ_a, ∞) costs no condensation more than
+    # one ending at a certified σ_max (10⁶ DOFs, μ = 1 and 3: 5 and 8 either way), and σ_max
+    # costs a Lanczos run and an LDLᵀ (5.5 s at 10⁶; where Lanczos stalls in the cluster of
+    # slow vibrations, 9 s for nothing)
+    condensed = prove_no_divergence(comm, pen, math.inf, tol=tol)
     log.info("divergence: condensed proof %s, %d condensation(s) (%.2f s%s)",
              "holds" if condensed.proved else "stopped", condensed.samples, time.perf_counter() - t0,
              "".join(f", {k} {v:.1f}" for k, v in condensed.seconds.items()))
     if condensed.proved:
-        if sigma_max is not None:
-            text = (f"no solution above σ_max = {sigma_max:.6g} (Rayleigh bound, LDLᵀ inertia) and "
-                    f"{condensed.statement} (a proof)")
-            test = f"rayleigh-window+{condensed.test}"
-        else:
-            text = f"{condensed.statement} (a proof)"
-            test = condensed.test
-        return [], text, True, eicp, dict(proof, test=test, statement=text, sigma_window=(0.0, upper),
+        text = f"{condensed.statement} (a proof)"
+        return [], text, True, eicp, dict(proof, test=condensed.test, statement=text, sigma_window=(0.0, math.inf),
                                           margin=condensed.margin)
+    # 5. the proof stopped at σ = covered: a certified σ_max ≤ covered (no solution above it,
+    # by the Rayleigh bound) completes it.  The whole Lanczos run only after a positive Ritz
+    # value: with none in the short run the top sits in the cluster of slow vibrations (the
+    # bound at 0 failed on it) and the run stalls for its whole budget (8.8 s at 10⁶ DOFs)
+    covered = condensed.window[1] if condensed.window else -math.inf
+    sigma_max = None
+    if b_definite and not stalls:
+        if not converged:
+            theta, converged = rayleigh_estimate(A, B)[:2]
+        # an unconverged Ritz value lies below λ_max: certifying above it wastes factorisations
+        sigma_max = _certified_top(A, B, theta, scale) if converged else None
+    log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
+             time.perf_counter() - t0)
+    if sigma_max is not None and sigma_max <= covered:
+        text = (f"no solution above σ_max = {sigma_max:.6g} (Rayleigh bound, LDLᵀ inertia) and none in "
+                f"[0, {covered:.6g}] by the condensed windows ({condensed.statement}) (a proof)")
+        return [], text, True, eicp, dict(proof, test="rayleigh-window+condensed-windows", statement=text,
+                                          sigma_window=(0.0, sigma_max), margin=condensed.margin)
+    if sigma_max is None:
+        stopped.append("no σ-window (λ_max(sym A, sym B) not estimated)" if not math.isfinite(theta) else
+                       f"no σ_max: no Ritz value of (sym A, sym B) above 0 in {PROBE_RESTARTS} Lanczos restarts "
+                       f"(largest {theta:.6g}; the top lies among the slow vibrations, where Lanczos stalls)"
+                       if stalls and not converged else
+                       f"no σ_max certified above the estimate {theta:.6g} of λ_max(sym A, sym B)")
+    else:
+        kwargs["target"] = sigma_max  # the whole search from the certified top
     stopped.append(f"condensed test: {condensed.statement}")
     if condensed.window:
         proof["sigma_window"] = tuple(float(v) for v in condensed.window)
@@ -257,9 +270,9 @@ def _window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float,
         eicp, verdict = search(full_budget)
         if verdict is not None:
             return verdict
-    stopped.append(f"the search from σ = {top:.6g} over {proof['supports_visited']} support(s) found no mode "
-                   f"({eicp.status})")
-    # 5. undecided, with what was established: the window, the supports, and the friction up
+    stopped.append(f"the search from σ = {kwargs['target']:.6g} over {proof['supports_visited']} support(s) found "
+                   f"no mode ({eicp.status})")
+    # 6. undecided, with what was established: the window, the supports, and the friction up
     # to which these contact states are proved stable
     t = time.perf_counter()
     if b_definite:

@@ -59,7 +59,7 @@ def _spurious_value(problem: EiCPProblem, target: float) -> float:
 def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
                lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
                options: dict | None = None, prefix: str = ACTIVE_SET, follow: bool = True,
-               **_ignored) -> EiCPResult:
+               give_up_after: int | None = None, **_ignored) -> EiCPResult:
     """One certified MEiCP solution by the active-set search (see the module docstring).
 
     target: shift of the eigen-solves; nev: eigenpairs per solve; lam_min: ignore eigenpairs
@@ -67,12 +67,14 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     options: PETSc options under ``prefix`` (a scene's ``[petsc]`` table); follow: after the
     first solve, follow the wanted eigenpair alone (nev = 1, shift just below its previous
     eigenvalue) — most of a solve's cost is shift-and-invert applications, and a shift next
-    to the wanted eigenvalue needs a handful of them."""
+    to the wanted eigenvalue needs a handful of them.  give_up_after: end an eigen-solve after
+    that many Krylov–Schur restarts when no Ritz value estimates an eigenvalue ≥ lam_min
+    (:class:`~meicp.petsc.reduced_pencil.ReducedPencilSolver`; a quick first look, not a proof)."""
     scaled, E = normalised(problem)
     if E is not None:  # shifts and the spurious value would overflow: solve scaled, map λ back
         result = active_set(scaled, tol=tol, target=scaled_value(target, E), nev=nev,
                             lam_min=scaled_value(lam_min, E), support0=support0, max_iter=max_iter, comm=comm,
-                            options=options, prefix=prefix, follow=follow)
+                            options=options, prefix=prefix, follow=follow, give_up_after=give_up_after)
         return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     J = problem.J
@@ -100,7 +102,9 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
 
         solver = ReducedPencilSolver(A, B, symmetric=symmetric, target=target,
                                      spurious=_spurious_value(problem, target), nev=nev,
-                                     prefix=prefix, options=options)
+                                     prefix=prefix, options=options,
+                                     give_up=None if give_up_after is None else
+                                     (give_up_after, 0.0 if lam_min is None else lam_floor(lam_min, scales)))
         result.timings["setup"] = time.perf_counter() - t0
         for it in range(1, max_iter + 1):
             key = S.tobytes()
@@ -164,7 +168,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     finally:
         if solver is not None:
             result.coverage = {"supports_visited": len(visited), "eigen_solves": solver.solves,
-                               "eps_iterations": solver.eps_iterations, "history": history,
+                               "eps_iterations": solver.eps_iterations, "gave_up": solver.gave_up,
+                               "history": history,
                                "unused_options": solver.unused_options, "option_error": option_error}
             solver.destroy()
         if owned:

@@ -1,0 +1,79 @@
+"""Node-block padding of sparse matrices before MUMPS (meicp.lattice.node_blocks)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from meicp.contact.condensation import pieces_of
+from meicp.contact.maps import contact_sets, reduced_system
+from meicp.lattice.assembly import assemble_scipy
+from meicp.lattice.model import LatticeModel
+from meicp.lattice.node_blocks import NodeBlocks, node_of
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from bench_scenes import two_layer_scene  # noqa: E402
+
+
+def _two_layer_FF(nx=8, ny=3):
+    scene = two_layer_scene(nx, (ny, ny), mu=1.0, states="slip+", shear=0.5)
+    model = LatticeModel(scene)
+    K, M = assemble_scipy(model)
+    maps = reduced_system(model, contact_sets(scene, model), ())
+    pieces = pieces_of(K, M, maps)
+    F = pieces.F
+    return pieces.Kt[F][:, F].tocsr(), node_of(maps.retained[F])
+
+
+def _row_patterns_agree_within_groups(H, groups) -> bool:
+    H = sp.csr_matrix(H)
+    for g in np.unique(groups):
+        rows = np.flatnonzero(groups == g)
+        cols = [tuple(H.indices[H.indptr[r]:H.indptr[r + 1]]) for r in rows]
+        if any(c != cols[0] for c in cols):
+            return False
+    return True
+
+
+def test_padding_keeps_values_and_completes_node_blocks():
+    KFF, nodes = _two_layer_FF()
+    # the lattice's products drop cancelled entries: the two DOFs of a node differ in pattern
+    assert not _row_patterns_agree_within_groups(KFF, nodes)
+    padded = NodeBlocks(nodes).pad(KFF)
+    assert padded.nnz > KFF.nnz
+    assert abs(padded - KFF).max() == 0.0
+    assert _row_patterns_agree_within_groups(padded, nodes)
+    # the columns agree too: a coupling of two nodes is a whole block
+    assert _row_patterns_agree_within_groups(padded.T.tocsr(), nodes)
+
+
+def test_padding_reuses_its_pattern_and_follows_a_new_one():
+    KFF, nodes = _two_layer_FF()
+    blocks = NodeBlocks(nodes)
+    first = blocks.pad(KFF)
+    shifted = (KFF + 0.25 * sp.eye(KFF.shape[0])).tocsr()  # same pattern, other values
+    again = blocks.pad(shifted)
+    assert np.array_equal(again.indices, first.indices) and np.array_equal(again.indptr, first.indptr)
+    assert abs(again - shifted).max() == 0.0
+    # a pattern with fewer entries lands in the kept one
+    fewer = sp.diags(KFF.diagonal()).tocsr()
+    assert abs(blocks.pad(fewer) - fewer).max() == 0.0
+    # one with an entry outside it gets a padding of its own
+    n = KFF.shape[0]
+    wider = (KFF + sp.csr_matrix(([1.0, 1.0], ([0, n - 1], [n - 1, 0])), shape=(n, n))).tocsr()
+    out = blocks.pad(wider)
+    assert abs(out - wider).max() == 0.0 and _row_patterns_agree_within_groups(out, nodes)
+
+
+def test_padding_sums_duplicates_and_checks_the_order():
+    groups = np.array([0, 0, 1, 1, 2])
+    H = sp.csr_matrix((np.array([1.0, 2.0, 3.0, 4.0]), (np.array([0, 0, 2, 4]), np.array([0, 0, 3, 1]))), shape=(5, 5))
+    padded = NodeBlocks(groups).pad(H)
+    assert np.array_equal(padded.toarray(), H.toarray())
+    assert padded.toarray()[0, 0] == 3.0
+    # rows 0 and 1 (node 0) both reach node 0's columns; row 4 reaches node 0 as a block
+    assert set(padded[1].indices) == {0, 1}
+    assert set(padded[4].indices) == {0, 1}
+    with pytest.raises(ValueError, match="order 5"):
+        NodeBlocks(groups).pad(sp.eye(4))
