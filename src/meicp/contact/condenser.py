@@ -154,7 +154,8 @@ class Condenser:
     def at(self, sigma: float, *, xi: bool = True) -> Condensed:
         """G(σ) = S + R (and the Ξ blocks) with its error.  Collective."""
         if self.method == "solves":
-            return condense(self.pieces, sigma, lambda H: mumps_factor(self.comm)(self.pad_FF(H)), tau=self.tau, xi=xi)
+            factor = mumps_factor(self.comm)
+            return condense(self.pieces, sigma, lambda H: factor(self.pad_FF(H)), tau=self.tau, xi=xi)
         if sigma == 0 and self._schur0 is not None:
             return self._schur0
         H, rows = self.bordered(sigma)
@@ -184,7 +185,8 @@ class Condenser:
         if sigma == 0 and self._factor0 is not None:
             return nullcontext(self._solve0)
         F = self.pieces.F
-        return MumpsFactor(self.comm, self.pad_FF((sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F]), symmetric=True)
+        H_FF = (sigma * self.pieces.Mt + self.pieces.Kt)[F][:, F]
+        return MumpsFactor(self.comm, self.pad_FF(H_FF), symmetric=True)
 
 
 def held_factor(comm, KFF, MFF, *, pad=None) -> tuple[MumpsFactor | None, float | None, str]:
@@ -245,7 +247,7 @@ def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
     """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
     use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
     (:func:`~meicp.petsc.inertia.pencil_is_negative`), which also proves K̃_FF ≻ 0.
-    ``(None, why)`` when not certified."""
+    ``(None, why)`` when not certified.  ``pad``: as for :func:`held_factor`."""
     pad = pad or (lambda H: H)
     with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
         try:
@@ -268,7 +270,8 @@ def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
 
 def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
     """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`)
-    proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  Collective."""
+    proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  ``pad``: as for
+    :func:`held_factor`.  Collective."""
     shifted = (tau * MFF - KFF).tocsr()
     shifted = shifted if pad is None else pad(shifted)
     with destroying(mat_from_scipy(comm, shifted), mat_from_scipy(comm, MFF)) as (Ap, Mp):
