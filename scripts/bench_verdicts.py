@@ -58,9 +58,14 @@ def family(args):
                                  "seconds": f"{t:.3f}", "evidence": r.evidence[:160]})
                     print(rows[-1]["nx"], rows[-1]["rows"], state, shear, rows[-1]["mu"], r.divergence,
                           rows[-1]["test"], rows[-1]["seconds"], flush=True)
-    write_rows(csv_path("verdicts_family"), rows, FAMILY)
+    fresh = {_family_key(r) for r in rows}  # a re-run replaces its scenes' rows, others stay
+    write_rows(csv_path("verdicts_family"), rows, FAMILY, keep=lambda r: _family_key(r) not in fresh)
     decided = sum(r["divergence"] is not None for r in rows)
     print(f"decided {decided}/{len(rows)} ({100 * decided / len(rows):.1f} %)")
+
+
+def _family_key(row) -> tuple:
+    return tuple(str(row[k]) for k in ("nx", "rows", "state", "shear", "mu"))
 
 
 def check(args):
@@ -77,7 +82,7 @@ def check(args):
         rows.append({"nx": nx, "rows": f"{lo}+{up}", "J": nx, "state": state, "shear": shear, "mu": f"{mu:.4g}",
                      "truth": truth.divergence, "window": window.divergence, "agree": agree,
                      "test": window.proofs[0].get("test", "")})
-    write_rows(csv_path("verdicts_check"), rows, CHECK)
+    write_rows(csv_path("verdicts_check"), rows, CHECK, keep=lambda r: False)  # one seeded draw: the whole file
     wrong = sum(not r["agree"] for r in rows)
     decided = sum(r["window"] is not None for r in rows)
     print(f"{len(rows)} scenes (|J| ≤ 16): decided {decided}, wrong {wrong}")

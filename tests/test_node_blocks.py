@@ -77,3 +77,20 @@ def test_padding_sums_duplicates_and_checks_the_order():
     assert set(padded[4].indices) == {0, 1}
     with pytest.raises(ValueError, match="order 5"):
         NodeBlocks(groups).pad(sp.eye(4))
+
+
+@pytest.mark.parametrize("states", ["slip+", "slip-"])
+def test_the_condensers_bordered_matrix_is_the_pieces_one_padded(states):
+    """Condenser.bordered(σ): 𝓗₀ + σ𝓗₁ on one padded pattern, value for value the pieces'
+    bordered matrix at every σ (0 included, where σM̃ vanishes)."""
+    from meicp.contact.condenser import Condenser
+
+    scene = two_layer_scene(8, (3, 3), mu=1.3, states=states, shear=0.5)
+    model = LatticeModel(scene)
+    maps = reduced_system(model, contact_sets(scene, model), ())
+    cond = Condenser(None, model, maps)
+    for sigma in (0.0, 0.37, 12.5):
+        H, rows = cond.bordered(sigma)
+        ref, ref_rows = cond.pieces.bordered(sigma)
+        assert np.array_equal(rows, ref_rows) and abs(H - ref).max() == 0.0
+        assert H.nnz >= ref.nnz

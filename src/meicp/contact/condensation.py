@@ -82,6 +82,14 @@ class PencilPieces:
         H = sp.bmat([[sigma * self.Mt + self.Kt, PJ.T], [PJ, None]], format="csr")
         return H, np.concatenate([self.J, self.n + np.arange(self.J.size)])
 
+    def bordered_parts(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
+        """``(𝓗₀, 𝓗₁, rows)`` with 𝓗(σ) = 𝓗₀ + σ𝓗₁ (:meth:`bordered`), for callers that
+        build 𝓗(σ) on one pattern for every σ."""
+        N_J, NM_J = self.N[self.J], self.NM[self.J]
+        H0 = sp.bmat([[self.Kt, N_J.T], [N_J, None]], format="csr")
+        H1 = sp.bmat([[self.Mt, NM_J.T], [NM_J, None]], format="csr")
+        return H0, H1, np.concatenate([self.J, self.n + np.arange(self.J.size)])
+
 
 def pieces_of(K, M, maps, *, friction: str = "scene") -> PencilPieces:
     """Split the pencil of :func:`~meicp.contact.maps.reduced_system`'s maps (K, M SciPy).

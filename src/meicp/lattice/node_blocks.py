@@ -38,7 +38,6 @@ class NodeBlocks:
         groups = np.asarray(groups, dtype=np.int64)
         _, self.groups = np.unique(groups, return_inverse=True)  # 0 … m−1
         self._pattern: sp.csr_matrix | None = None  # padded pattern (canonical CSR, data unused)
-        self._keys: np.ndarray | None = None        # its entries as row·n + column, sorted
         self._seen: tuple | None = None             # (indptr, indices) of the last H padded
         self._where: np.ndarray | None = None       # where H's entries sit in the padded pattern
 
@@ -62,15 +61,10 @@ class NodeBlocks:
                 and np.array_equal(self._seen[1], H.indices))
 
     def _locate(self, H) -> None:
-        keys = _keys(H)
-        if self._pattern is not None:
-            where = np.minimum(np.searchsorted(self._keys, keys), self._keys.size - 1)
-            if not np.array_equal(self._keys[where], keys):
-                self._pattern = None  # H has entries outside the padded pattern: pad H's own
-        if self._pattern is None:
+        where = None if self._pattern is None else _positions(self._pattern, H)
+        if where is None:  # the first matrix, or one with entries outside the padded pattern
             self._pattern = self._padded_pattern(H)
-            self._keys = _keys(self._pattern)
-            where = np.searchsorted(self._keys, keys)
+            where = _positions(self._pattern, H)
         self._seen = (H.indptr.copy(), H.indices.copy())
         self._where = where
 
@@ -85,6 +79,14 @@ class NodeBlocks:
         return P
 
 
-def _keys(H: sp.csr_matrix) -> np.ndarray:
-    rows = np.repeat(np.arange(H.shape[0], dtype=np.int64), np.diff(H.indptr))
-    return rows * H.shape[1] + H.indices
+def _positions(P: sp.csr_matrix, H: sp.csr_matrix) -> np.ndarray | None:
+    """Where each entry of H (canonical CSR) sits in P's entries, or None when H has an entry
+    outside P's pattern: one elementwise product of P's entry numbers with H's pattern (a merge
+    of sorted rows in C, where a search of every entry took 1.4 s at 10⁶ DOFs)."""
+    number = sp.csr_matrix((np.arange(1, P.nnz + 1, dtype=np.float64), P.indices, P.indptr), shape=P.shape)
+    pattern = sp.csr_matrix((np.ones(H.nnz), H.indices, H.indptr), shape=H.shape)
+    hit = number.multiply(pattern).tocsr()
+    if hit.nnz != H.nnz:
+        return None
+    hit.sort_indices()
+    return hit.data.astype(np.int64) - 1

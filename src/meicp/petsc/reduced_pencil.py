@@ -165,7 +165,8 @@ class ReducedPencilSolver:
                 return reason.CONVERGED_TOL
             if its >= max_it:
                 return reason.DIVERGED_ITS
-            if seen["hopeless"] and seen["restarts"] >= restarts:
+            # the monitor's view of this solve's previous restart (not of an earlier solve's)
+            if seen["hopeless"] and seen["restarts"] == its - 1 >= restarts:
                 self.gave_up += 1
                 return reason.DIVERGED_ITS
             return reason.ITERATING
