@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -95,8 +96,15 @@ class Condenser:
             self._factor0.destroy()
             self._factor0 = None
 
+    @cached_property
+    def blocks_FF(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """``(K̃_FF, M̃_FF)``, sliced once (0.3 s per slice at 10⁶ DOFs; the held proof, the
+        sharper τ and the choice of method all read them)."""
+        F = self.pieces.F
+        return self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr()
+
     def _diagonal_FF(self) -> bool:
-        MFF = self.pieces.Mt[self.pieces.F][:, self.pieces.F]
+        MFF = self.blocks_FF[1]
         return (MFF - sp.diags(MFF.diagonal())).count_nonzero() == 0
 
     def prepare(self, *, need_tau: bool, keep_factor: bool = False) -> bool:
@@ -110,8 +118,7 @@ class Condenser:
         places the windows reuses it, and the probe solves with K̃_FF by refining on it."""
         t = time.perf_counter()
         F = self.pieces.F
-        KFF = self.pieces.Kt[F][:, F].tocsr()
-        MFF = self.pieces.Mt[F][:, F].tocsr()
+        KFF, MFF = self.blocks_FF
         factor = None
         try:
             if F.size == 0:
@@ -144,9 +151,7 @@ class Condenser:
         old one when this fails).  Collective."""
         if self.tau_scale is not None and self.tau is not None and self.tau_scale > self.tau:
             t = time.perf_counter()
-            F = self.pieces.F
-            if not tau_inertia(self.comm, self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr(),
-                               self.tau_scale, pad=self.pad_FF):
+            if not tau_inertia(self.comm, *self.blocks_FF, self.tau_scale, pad=self.pad_FF):
                 self.tau = self.tau_scale
             self.seconds["tau"] = time.perf_counter() - t
         return self.tau
