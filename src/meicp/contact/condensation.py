@@ -78,13 +78,12 @@ class PencilPieces:
     def bordered(self, sigma: float) -> tuple[sp.csr_matrix, np.ndarray]:
         """``(𝓗, rows)``: 𝓗 = [[σM̃ + K̃, P_Jᵀ], [P_J, 0]] (symmetric, P = σN_M + N) and the
         rows J ∪ extra whose Schur complement is [[S, Rᵀ], [R, −Z]] (S, R, Z of σ)."""
-        PJ = (sigma * self.NM + self.N)[self.J]
-        H = sp.bmat([[sigma * self.Mt + self.Kt, PJ.T], [PJ, None]], format="csr")
-        return H, np.concatenate([self.J, self.n + np.arange(self.J.size)])
+        H0, H1, rows = self.bordered_parts()
+        return (H0 + sigma * H1).tocsr(), rows
 
     def bordered_parts(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
         """``(𝓗₀, 𝓗₁, rows)`` with 𝓗(σ) = 𝓗₀ + σ𝓗₁ (:meth:`bordered`), for callers that
-        build 𝓗(σ) on one pattern for every σ."""
+        build 𝓗(σ) on one pattern for every σ (:meth:`~.condenser.Condenser.bordered`)."""
         N_J, NM_J = self.N[self.J], self.NM[self.J]
         H0 = sp.bmat([[self.Kt, N_J.T], [N_J, None]], format="csr")
         H1 = sp.bmat([[self.Mt, NM_J.T], [NM_J, None]], format="csr")
