@@ -32,10 +32,13 @@ _C = None
 _MUMPS = {"pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 2}  # AMF ordering (no METIS in Debian's MUMPS)
 #: MUMPS' block-low-rank factorisation for the Schur complements, dropping at this relative
 #: threshold (ICNTL(35) = 2, CNTL(7)): at 10⁶ DOFs a Schur complement onto 2,000 rows took
-#: 2.2 s instead of 2.7 s and differed from the full-rank one by 4e-15 relative (1e-10: 2.2 s,
-#: 1.6e-13).  Only where the error is measured (:func:`schur_complement`'s callers probe it);
-#: the factors whose inertia is a proof (:class:`MumpsFactor`) stay full rank
-SCHUR_LOW_RANK = 1e-12
+#: 2.5 s instead of 3.1 s and differed from the full-rank one by 1.6e-16 relative, rounding.
+#: 1e-12 was faster (2.3 s) but 4e-15 off — relative to the largest entry, which is of the
+#: ill-conditioned block Z: the measured error of G rose from 1.2e-12 to 4.1e-12 and the
+#: critical friction's exact bracket at 10⁶ DOFs widened to 2e-5.  Only where the error is
+#: measured (:func:`schur_complement`'s callers probe it); the factors whose inertia is a
+#: proof (:class:`MumpsFactor`) stay full rank
+SCHUR_LOW_RANK = 1e-14
 
 
 def _lib():
