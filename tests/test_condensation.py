@@ -191,3 +191,18 @@ def test_a_frictional_interface_is_undecided_beyond_sigma_zero():
     assert not proof.proved and "diagonal B" in proof.statement
     with pytest.raises(ValueError, match="sigma_max"):
         prove_no_divergence(None, pencil(scene), -1.0)
+
+
+def test_the_low_rank_schur_complement_is_the_full_rank_one_to_rounding():
+    # the default is MUMPS' block-low-rank factorisation (SCHUR_LOW_RANK); on a lattice whose
+    # fronts it compresses (10⁵ DOFs: a coarser threshold visibly moves the result; below
+    # about 4·10⁴ MUMPS compresses nothing) it must agree with the full-rank Schur complement to
+    # rounding, relative to the largest entry (of Z)
+    p, _ = split(nx=250, rows=(100, 100), states="slip+", mu=1.0)
+    H, rows = p.bordered(0.01)
+    full = dense_schur(None, H, rows, symmetric=True, options={"mat_mumps_icntl_35": 0})
+    default = dense_schur(None, H, rows, symmetric=True)
+    coarse = dense_schur(None, H, rows, symmetric=True, options={"mat_mumps_cntl_7": 1e-4})
+    scale = np.abs(full).max()
+    assert np.abs(default - full).max() <= 1e-13 * scale
+    assert np.abs(coarse - full).max() > 1e-9 * scale

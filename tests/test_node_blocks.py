@@ -94,3 +94,24 @@ def test_the_condensers_bordered_matrix_is_the_pieces_one_padded(states):
         ref, ref_rows = cond.pieces.bordered(sigma)
         assert np.array_equal(rows, ref_rows) and abs(H - ref).max() == 0.0
         assert H.nnz >= ref.nnz
+
+
+@pytest.mark.parametrize("contiguous", [True, False])
+def test_the_padded_pattern_couples_whole_groups_and_nothing_else(contiguous):
+    # contiguous groups (a node's DOFs are neighbours) take the index-arithmetic path, others
+    # the product memberᵀ·coupled·member: both must give exactly the pairs of coupled groups
+    rng = np.random.default_rng(3)
+    groups = np.repeat(np.arange(40), rng.integers(1, 4, size=40))
+    if not contiguous:
+        groups = rng.permutation(groups)
+    n = groups.size
+    H = (sp.random(n, n, density=0.04, random_state=5) + sp.eye(n)).tocsr()
+    P = NodeBlocks(groups).pad(H)
+    member = np.equal.outer(groups, np.unique(groups)).astype(float)
+    coupled = member.T @ (H.toarray() != 0) @ member > 0
+    expected = member @ coupled @ member.T > 0
+    pattern = np.zeros((n, n), dtype=bool)
+    pattern[np.repeat(np.arange(n), np.diff(P.indptr)), P.indices] = True
+    assert np.array_equal(pattern, expected)
+    assert all(np.all(np.diff(P.indices[P.indptr[i]:P.indptr[i + 1]]) > 0) for i in range(n))  # sorted, no repeats
+    assert abs(P - H).max() == 0

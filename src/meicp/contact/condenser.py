@@ -9,7 +9,8 @@ Two ways (``method``):
   *bounded* from the residuals and a certified τ ≤ λ_min(K̃_FF, M̃_FF) (half a SLEPc estimate,
   proved by one MUMPS inertia).  Needs a diagonal M̃_FF.
 * ``"schur"``: MUMPS' Schur complement of the bordered matrix (:meth:`PencilPieces.bordered`)
-  onto J and |J| extra rows, one factorisation per σ; it has no residual, so its error is
+  onto J and |J| extra rows, one block-low-rank factorisation per σ
+  (:data:`~meicp.petsc.schur.SCHUR_LOW_RANK`); it has no residual, so its error is
   *measured* once, at σ = 0, along three probe vectors solved with K̃_FF, and charged
   ``PROBE_SAFETY`` times over (a measurement, not a bound).  Those solves refine on one MUMPS
   LDLᵀ of K̃_FF − 2ηD whose inertia is also the proof that the lattice is held and gives

@@ -71,12 +71,42 @@ class NodeBlocks:
     def _padded_pattern(self, H) -> sp.csr_matrix:
         g, n = self.groups, self.groups.size
         m = int(g.max(initial=-1)) + 1
+        if n and np.all(np.diff(g) >= 0):
+            # contiguous groups: the rows of group G are one run of H's rows, so H's column
+            # groups, read in place, are the group-level rows (with repeats, summed away)
+            runs = np.concatenate([[0], np.cumsum(np.bincount(g, minlength=m))])
+            coupled = sp.csr_matrix((np.ones(H.nnz), g[H.indices], H.indptr[runs]), shape=(m, m))
+            coupled.sum_duplicates()  # canonical: sorted columns, one entry per pair of groups
+            return _expand_contiguous(coupled, g)
         rows = np.repeat(np.arange(n), np.diff(H.indptr))
         coupled = sp.csr_matrix((np.ones(H.nnz), (g[rows], g[H.indices])), shape=(m, m))
         member = sp.csr_matrix((np.ones(n), (np.arange(n), g)), shape=(n, m))
         P = (member @ coupled @ member.T).tocsr()  # positive entries: nothing cancels
         P.sort_indices()
         return P
+
+
+def _expand_contiguous(coupled: sp.csr_matrix, g: np.ndarray) -> sp.csr_matrix:
+    """The padded pattern when every group is a contiguous run of rows in group order (the
+    natural DOF numbering of a lattice: a node's DOFs are neighbours): each coupled pair of
+    groups (G, c) becomes the column range of c in every row of G, already sorted.  Index
+    arithmetic only, where the product member·coupled·memberᵀ took 1.1 s at 10⁶ DOFs."""
+    n, m = g.size, coupled.shape[0]
+    size = np.bincount(g, minlength=m)
+    start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    width = size[coupled.indices]                       # columns each coupled pair expands to
+    total = int(width.sum())
+    first = np.repeat(np.cumsum(width) - width, width)  # where each pair's range begins in `cols`
+    cols = np.repeat(start[coupled.indices], width) + (np.arange(total) - first)
+    # the expanded row of group G is cols[lengths_ptr[G] : lengths_ptr[G + 1]]
+    group_ptr = np.concatenate([[0], np.cumsum(width)])[coupled.indptr]
+    length = np.diff(group_ptr)[g]
+    indptr = np.concatenate([[0], np.cumsum(length)])
+    nnz = int(indptr[-1])
+    indices = cols[np.repeat(group_ptr[:-1][g] - indptr[:-1], length) + np.arange(nnz)]
+    P = sp.csr_matrix((np.ones(nnz), indices.astype(np.int32 if n < 2 ** 31 else np.int64), indptr), shape=(n, n))
+    P.has_sorted_indices = True
+    return P
 
 
 def _positions(P: sp.csr_matrix, H: sp.csr_matrix) -> np.ndarray | None:
