@@ -98,7 +98,7 @@ def _expand_contiguous(coupled: sp.csr_matrix, g: np.ndarray) -> sp.csr_matrix:
     total = int(width.sum())
     first = np.repeat(np.cumsum(width) - width, width)  # where each pair's range begins in `cols`
     cols = np.repeat(start[coupled.indices], width) + (np.arange(total) - first)
-    # the expanded row of group G is cols[lengths_ptr[G] : lengths_ptr[G + 1]]
+    # the expanded row of group G is cols[group_ptr[G] : group_ptr[G + 1]]
     group_ptr = np.concatenate([[0], np.cumsum(width)])[coupled.indptr]
     length = np.diff(group_ptr)[g]
     indptr = np.concatenate([[0], np.cumsum(length)])
