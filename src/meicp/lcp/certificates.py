@@ -138,7 +138,7 @@ def optimise_scaling(Gs: list[np.ndarray], d0: np.ndarray | None = None, iters: 
         d = np.exp(logd - logd.max())
         vals = []
         for G in Gs:
-            w, V = sl.eigh(scaled(G, d).astype(precision, copy=False), subset_by_index=[0, 0], check_finite=False)
+            w, V = sl.eigh(scaled(G, d).astype(precision, copy=False), subset_by_index=[0, 0])
             vals.append((float(w[0]), V[:, 0].astype(np.float64), G))
         lam, v, G = min(vals, key=lambda t: t[0])
         value = lam / d.mean()
