@@ -67,8 +67,8 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     (about an hour) unless ``max_j`` is given.  Other keywords go to the method (``target``,
     ``nev``, ``max_iter``, ``options``...; ``auto`` hands them to every method it runs).
     ``method="auto"`` runs the portfolio of :func:`auto_order` and records each method's
-    outcome in ``result.attempts``; ``result.method`` names the one that answered.  Every returned solution passed its certificate; see
-    :class:`EiCPResult` for the statuses.
+    outcome in ``result.attempts``; ``result.method`` names the one that answered.  Every
+    returned solution passed its certificate; see :class:`EiCPResult` for the statuses.
     """
     check_options(tol=tol, lam_min=lam_min, **kwargs)
     if not 0.0 < tol < 1.0:
