@@ -61,3 +61,27 @@ def test_two_ranks_solve_what_one_does(comm):
     M2 = sp.csr_matrix(np.array([[1.0, 2.0], [2.0, 4.0]], dtype=complex))
     with pytest.raises(zmumps.MumpsError):  # on both ranks: none is left waiting
         zmumps.ComplexFactor(comm, M2[comm.Get_rank():comm.Get_rank() + 1], comm.Get_rank(), 2)
+
+
+@pytest.mark.parametrize("options, match", [
+    ({"st_mat_mumps_icntl_18": 0}, r"ICNTL\(18\) of the complex flutter factor is set by meicp"),
+    ({"st_mat_mumps_icntl_99": 1}, r"MUMPS has no ICNTL\(99\)"),
+    ({"st_mat_mumps_cntl_16": 0.1}, r"MUMPS has no CNTL\(16\)"),
+    ({"st_mat_mumps_icntl_14": "lots"}, r"is not an integer"),
+])
+def test_hostile_factor_options_name_the_option(options, match):
+    """A control the interface owns, one MUMPS does not have, or a value of the wrong kind is
+    a ProblemError naming it, before MUMPS reads anything."""
+    from meicp.core.errors import ProblemError
+    from meicp.petsc.flutter import SlidingPencilOps, complex_shift_solve
+    from meicp.petsc.mat import mat_from_scipy
+
+    M, _ = _system(40)
+    A = mat_from_scipy(None, (M.real + M.real.T).tocsr())
+    B = mat_from_scipy(None, sp.identity(40, format="csr"))
+    try:
+        with SlidingPencilOps(A, B) as ops, pytest.raises(ProblemError, match=match):
+            complex_shift_solve(ops, 1.0 + 0.5j, nev=1, ncv=8, options=options)
+    finally:
+        A.destroy()
+        B.destroy()

@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from . import import_petsc, import_slepc, zmumps
 from .comm import mpi_comm
 from .mat import mat_from_local_csr, vec_to_numpy
-from .options import FLUTTER, OptionsScope
+from .options import FLUTTER, OptionsScope, PetscOptionError
 
 _J2 = sp.csr_matrix(np.array([[0.0, 1.0], [-1.0, 0.0]]))
 _I2 = sp.identity(2, format="csr")
@@ -192,7 +192,11 @@ def mumps_controls(prefix: str) -> tuple[dict, dict]:
         for key, out, get in (("icntl_", icntl, db.getInt), ("cntl_", cntl, db.getReal)):
             head = f"{prefix}st_mat_mumps_{key}"
             if name.startswith(head) and name[len(head):].isdigit():
-                out[int(name[len(head):])] = get(name)
+                try:
+                    out[int(name[len(head):])] = get(name)
+                except PETSc.Error:
+                    raise PetscOptionError(f"-{name} {db.getString(name)!r} is not "
+                                           f"{'an integer' if key == 'icntl_' else 'a number'}") from None
     return icntl, cntl
 
 

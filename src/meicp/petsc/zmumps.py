@@ -30,6 +30,9 @@ _PINT = C.POINTER(C.c_int)
 #: 8,360 bytes, version_number at 7,072, metis_options at 8,196)
 VERSIONS = ("5.5.",)
 LIBRARIES = ("libzmumps-5.5.so", "libzmumps.so")
+#: ICNTL(18) (distributed input), (19) (Schur), (20), (21) (right-hand side and solution on the
+#: host): the layout this interface passes, not the user's to change
+OWN_ICNTL = frozenset({18, 19, 20, 21})
 
 
 class ZMUMPS_STRUC_C(C.Structure):  # noqa: N801 — the C name
@@ -97,6 +100,16 @@ class ComplexFactor:
             raise MumpsError(why)
         self.lib, self.comm, self.lo, self.n = lib, comm, lo, n
         self.rows = rows.shape[0]
+        for name, given, size in (("ICNTL", icntl, 60), ("CNTL", cntl, 15)):
+            bad = sorted(k for k in (given or {}) if not 1 <= k <= size)
+            if bad:
+                raise MumpsError(f"MUMPS has no {name}({bad[0]}) (1 … {size}): check the "
+                                 f"-meicp_flutter_st_mat_mumps_{name.lower()}_<k> options")
+        own = sorted(set(icntl or {}) & OWN_ICNTL)
+        if own:  # the data layout this interface passes: another value would read absent arrays
+            raise MumpsError(f"ICNTL({own[0]}) of the complex flutter factor is set by meicp (distributed rows, "
+                             "centralised right-hand side and solution, no Schur complement); remove "
+                             f"-meicp_flutter_st_mat_mumps_icntl_{own[0]}")
         self.id = ZMUMPS_STRUC_C()
         self.id.sym, self.id.par = 0, 1
         self.id.comm_fortran = comm.py2f() if comm is not None else _self_comm()
