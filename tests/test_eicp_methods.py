@@ -291,7 +291,8 @@ def test_semismooth_from_default_start_is_certified_or_honest(data, snes_type):
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems, st.sampled_from(["vinewtonrsls", "vinewtonssls"]), st.integers(0, 10 ** 6))
 def test_semismooth_converges_from_near_a_known_solution(data, snes_type, pick):
-    """A start within 1e-3 of a solution with the same zeros converges to it.
+    """A start within 1e-3 of a solution with the same zeros converges to it (to a
+    solution, when another lies within that distance).
 
     Zeros stay zeros: the reduced-space method identifies the active set from x_j = 0 and,
     from a small *positive* x_j where the solution has 0, often converges elsewhere
@@ -308,8 +309,14 @@ def test_semismooth_converges_from_near_a_known_solution(data, snes_type, pick):
     x0 = x * (1 + 1e-3 * rng.standard_normal(x.size))
     result = semismooth(p, x0=x0, lam0=lam * (1 + 1e-3) + 1e-3, snes_type=snes_type)
     assert result.success, result.message
-    assert result.lam == pytest.approx(lam, abs=1e-9 * max(1.0, abs(lam)))
     assert result.solutions[0].residual <= TOL
+    every = brute_force(A, B, J)
+    assert among(result.solutions[0], every)
+    # a start 1e-3 away is as near a second solution whose λ lies that close (measured: two
+    # supports of one 6×6 EiCP 6.4e-7 apart in λ); an isolated one must be the one converged to
+    others = [mu for mu, _ in every if mu != lam]
+    if all(abs(mu - lam) > 1e-2 * max(1.0, abs(lam)) for mu in others):
+        assert result.lam == pytest.approx(lam, abs=1e-9 * max(1.0, abs(lam)))
 
 
 # ------------------------------------------------------------------------------------------

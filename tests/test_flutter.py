@@ -247,22 +247,28 @@ def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeyp
     assert fl.off_cluster(tau, 0).imag > tau.imag and fl.off_cluster(tau, 1).imag > fl.off_cluster(tau, 0).imag
 
 
-def test_the_2n_factor_is_analysed_in_node_blocks_only_when_they_divide_the_order():
+def test_the_factors_are_analysed_in_node_blocks_only_when_they_divide_the_order():
     """MUMPS compresses blocks of |ICNTL(15)| rows, and factors wrongly, without an error,
-    when they do not divide the order: blocks of 4 only for an even n (2n divisible by 4)."""
-    from meicp.petsc.flutter import shift_defaults
+    when they do not divide the order: on the 2n form blocks of 4 only for an even n (2n
+    divisible by 4); on the complex n form blocks of 2 for an even n, none for an odd one."""
+    from meicp.petsc.flutter import complex_defaults, shift_defaults
 
     assert shift_defaults(4, 24, 1e-10, n=1000)["st_mat_mumps_icntl_15"] == -4
     assert shift_defaults(4, 24, 1e-10, n=1001)["st_mat_mumps_icntl_15"] == -2
+    assert complex_defaults(4, 24, 1e-10, n=1000)["st_mat_mumps_icntl_15"] == -2
+    assert complex_defaults(4, 24, 1e-10, n=1001)["st_mat_mumps_icntl_15"] == 0
+    assert complex_defaults(4, 24, 1e-10, n=1000, low_rank=1e-10)["st_mat_mumps_cntl_7"] == 1e-10
     assert "st_mat_mumps_icntl_35" not in shift_defaults(4, 24, 1e-10, n=1000)
     blr = shift_defaults(4, 24, 1e-10, n=1000, low_rank=1e-10)
     assert blr["st_mat_mumps_icntl_35"] == 2 and blr["st_mat_mumps_cntl_7"] == 1e-10
 
 
-@pytest.mark.parametrize("parity, low_rank", [(0, None), (1, None), (0, 1e-10)])
-def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity, low_rank):
-    """The search certifies QZ's modes whether the order is even (node blocks of 4) or odd
-    (blocks of 2), with a full-rank or a block-low-rank factor of the 2n form."""
+@pytest.mark.parametrize("parity, low_rank, form", [(0, None, "complex"), (1, None, "complex"),
+                                                   (0, 1e-10, "complex"), (0, None, "real"), (1, None, "real"),
+                                                   (0, 1e-10, "real")])
+def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity, low_rank, form):
+    """The search certifies QZ's modes whether the order is even (node blocks) or odd, with a
+    full-rank or a block-low-rank factor, complex (ZMUMPS) or of the real 2n form."""
     scene = lattice(16, (3, 3), 2.0)
     with pencil(scene) as pen:
         n = pen.A.shape[0] - (pen.A.shape[0] % 2 != parity)
@@ -270,7 +276,8 @@ def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity,
     assert n % 2 == parity
     ref = fl.dense_flutter(A, B)
     tau = ref.modes[0][0] + 0.01j
-    got = fl.search_flutter(A, B, [tau], nev=2, ncv=12, low_rank=low_rank)
+    got = fl.search_flutter(A, B, [tau], nev=2, ncv=12, low_rank=low_rank,
+                            options={"real_form": True} if form == "real" else None)
     assert got.flutter is True and got.modes
     assert all(m[2] <= fl.RESIDUAL_TOL for m in got.modes)
     assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
@@ -403,3 +410,29 @@ def test_the_skew_bound_is_its_formula_and_bounds_every_imaginary_part():
             assert ops.skew_bound() == pytest.approx(np.abs(W).sum(axis=1).max(), rel=1e-14)
     sigma = sl.eigvals(A, np.diag(d))
     assert np.abs(sigma.imag).max() <= np.abs(W).sum(axis=1).max()
+
+
+def test_complex_and_real_form_factors_return_the_same_pairs():
+    """The complex ZMUMPS factor of A − τB and the real LU of the 2n form K_τ are two
+    factorisations of one operator: the same eigenvalues near τ, each pair's backward error
+    recomputed on (A, B); the search says which factor it used."""
+    from meicp.petsc.flutter import SlidingPencilOps, complex_shift_solve
+    from meicp.petsc.mat import mat_from_scipy
+
+    scene = lattice(16, (3, 3), 2.0)
+    with pencil(scene) as pen:
+        A_s, B_s = pen.A.tocsr(), pen.B.tocsr()
+    tau = fl.dense_flutter(A_s, B_s).modes[0][0] + 0.01j
+    A, B = mat_from_scipy(None, A_s), mat_from_scipy(None, B_s)
+    try:
+        with SlidingPencilOps(A, B) as ops:
+            got, info = complex_shift_solve(ops, tau, nev=3, ncv=16)
+            ref, ref_info = complex_shift_solve(ops, tau, nev=3, ncv=16, options={"real_form": True})
+    finally:
+        A.destroy()
+        B.destroy()
+    assert info["factor"] == "complex" and ref_info["factor"] == "real 2n"
+    assert len(got) >= 2 and all(res <= 1e-12 for _, _, res in got)
+    nearest = sorted(ref, key=lambda p: abs(p[0] - tau))[:2]
+    for sigma, _, _ in nearest:
+        assert min(abs(sigma - g[0]) for g in got) <= 1e-10 * abs(sigma)

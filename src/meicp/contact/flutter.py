@@ -90,9 +90,9 @@ OFF_CLUSTER_TRIES = 1
 #: converged in 16 restarts at 3·10⁵, one of 16 in one or two (docs/benchmarks.md, Flutter)
 OFF_CLUSTER_FROM = 200_000
 OFF_CLUSTER_NCV = 16
-#: from SEARCH_LARGE retained DOFs the 2n form is factored block-low-rank at this dropping
-#: tolerance (MUMPS CNTL(7)): 2.2× faster at 10⁶ DOFs, certified pairs' backward errors
-#: 4e-13 as without it (docs/benchmarks.md, Flutter)
+#: from SEARCH_LARGE retained DOFs the shifted pencil is factored block-low-rank at this
+#: dropping tolerance (MUMPS CNTL(7)): the 2n real form 2.2× faster at 10⁶ DOFs, certified
+#: pairs' backward errors 4e-13 as without it (docs/benchmarks.md, Flutter)
 LOW_RANK_TOL = 1e-10
 
 
@@ -257,7 +257,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
     complex ``targets``: True with certified modes, else None — never a proof of absence.
     A target whose converged pairs all fail the residual gate is retried off the cluster
     (:func:`off_cluster`), at most ``off_cluster_tries`` times.  ``low_rank``: the MUMPS
-    block-low-rank tolerance of the 2n factor (None: full rank).  Collective."""
+    block-low-rank tolerance of the factor (None: full rank).  Collective."""
     own = not is_petsc_mat(A)
     if own:
         comm = mpi_comm(comm)

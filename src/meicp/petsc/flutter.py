@@ -27,10 +27,10 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from . import import_petsc, import_slepc
+from . import import_petsc, import_slepc, zmumps
 from .comm import mpi_comm
 from .mat import mat_from_local_csr, vec_to_numpy
-from .options import FLUTTER, OptionsScope
+from .options import FLUTTER, OptionsScope, PetscOptionError
 
 _J2 = sp.csr_matrix(np.array([[0.0, 1.0], [-1.0, 0.0]]))
 _I2 = sp.identity(2, format="csr")
@@ -165,41 +165,122 @@ def diagonal_of(B, B_local=None):
     return None if _allreduce(B.getComm(), bad) else d
 
 
+def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
+    """Code defaults of one complex shift-and-invert solve with a complex MUMPS factor
+    (:class:`~meicp.petsc.zmumps.ComplexFactor`): SLEPc's Krylov–Schur on the operator
+    K_τ⁻¹B₂ of the 2n form (nev, ncv there), and the factor's controls under the names the 2n
+    form's factor had (``st_mat_mumps_icntl_<k>``, ``st_mat_mumps_cntl_<k>``: MUMPS' own
+    numbers).  ICNTL(15) = −2 analyses the graph of DOF pairs (a lattice node) when n is
+    even — none when odd, since blocks that do not divide the order give a wrong factor
+    without an error; ``low_rank``: block-low-rank factor and solves at that CNTL(7)."""
+    defaults = {"eps_type": "krylovschur", "eps_non_hermitian": True, "eps_largest_magnitude": True,
+                "eps_nev": nev, "eps_tol": tol, "eps_max_it": 500, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
+    if ncv:
+        defaults["eps_ncv"] = ncv
+    if low_rank:
+        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
+    return defaults
+
+
+def mumps_controls(prefix: str) -> tuple[dict, dict]:
+    """``(icntl, cntl)``: the ``-<prefix>st_mat_mumps_icntl_<k>`` / ``cntl_<k>`` values in the
+    options database, by MUMPS number (read, so never reported unused)."""
+    PETSc = import_petsc()
+    db = PETSc.Options()
+    icntl, cntl = {}, {}
+    for name in db.getAll():
+        for key, out, get in (("icntl_", icntl, db.getInt), ("cntl_", cntl, db.getReal)):
+            head = f"{prefix}st_mat_mumps_{key}"
+            if name.startswith(head) and name[len(head):].isdigit():
+                try:
+                    out[int(name[len(head):])] = get(name)
+                except PETSc.Error:
+                    raise PetscOptionError(f"-{name} {db.getString(name)!r} is not "
+                                           f"{'an integer' if key == 'icntl_' else 'a number'}") from None
+    return icntl, cntl
+
+
+class _ComplexInverse:
+    """The MATSHELL z ↦ K_τ⁻¹B₂z of the 2n form by one complex solve: K_τ acts on
+    interleaved z as A − τB on z₁ + iz₂ (:func:`complex_shift_solve`)."""
+
+    def __init__(self, factor, B2):
+        self.factor, self.B2 = factor, B2
+        self.work = B2.createVecLeft()
+
+    def mult(self, mat, x, y):
+        self.B2.mult(x, self.work)
+        w = self.work.getArray(readonly=True)
+        sol = self.factor.solve(w[0::2] + 1j * w[1::2])
+        out = y.getArray()
+        out[0::2], out[1::2] = sol.real, sol.imag
+
+    def destroy(self, mat=None):  # petsc4py calls it with the shell Mat when that is destroyed
+        if self.work is not None:
+            self.work.destroy()
+            self.work = None
+
+
 def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, ncv: int | None = 12,
                         tol: float = 1e-12, low_rank: float | None = None,
                         options: dict | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
     shift-and-invert on the real 2n form (every σ of the real form comes with its
-    conjugate: nev, ncv are doubled there).  Returns ``(pairs, info)``: pairs = [(σ with
-    Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info = {``radius``:
-    the largest |σ − τ| among the converged (the disk searched), ``nconv``, ``iterations``,
-    ``seconds``}.  ``low_rank``: see :func:`shift_defaults`.  ``options``: the scene's
-    ``[petsc]`` table (keys without the prefix).  Collective."""
+    conjugate: nev, ncv are doubled there): Krylov–Schur on K_τ⁻¹B₂ applied through a complex
+    MUMPS factor of A − τB (:mod:`meicp.petsc.zmumps`), or — when no ZMUMPS of a known
+    version loads, or ``-meicp_flutter_real_form`` is given — SLEPc's own shift-and-invert
+    with a real MUMPS LU of K_τ (twice the flops and memory).  Returns ``(pairs, info)``:
+    pairs = [(σ with Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info =
+    {``radius``: the largest |σ − τ| among the converged (the disk searched), ``nconv``,
+    ``iterations``, ``seconds``, ``factor``: "complex" or "real 2n"}.  ``low_rank``: see
+    :func:`shift_defaults`.  ``options``: the scene's ``[petsc]`` table (keys without the
+    prefix).  Collective."""
+    PETSc = import_petsc()
     SLEPc = import_slepc()
     t0 = time.perf_counter()
     tau = complex(tau)
     A = ops.A
     n = A.getSize()[0]
-    K_local = (sp.kron(ops.A_local - tau.real * ops.B_local, _I2, format="csr")
-               + tau.imag * sp.kron(ops.B_local, _J2, format="csr"))
-    K = mat_from_local_csr(A.getComm(), K_local, 2 * n)
-    B2 = mat_from_local_csr(A.getComm(), sp.kron(ops.B_local, _I2, format="csr"), 2 * n)
-    eps = SLEPc.EPS().create(comm=A.getComm())
-    zr = zi = None
+    pcomm = A.getComm()
+    real_form = bool((options or {}).get("real_form")) or PETSc.Options().getBool(FLUTTER + "real_form", False)
+    if not real_form and zmumps.load()[0] is None:
+        real_form = True
+    B2 = mat_from_local_csr(pcomm, sp.kron(ops.B_local, _I2, format="csr"), 2 * n)
+    eps = SLEPc.EPS().create(comm=pcomm)
+    K = shell = factor = zr = zi = None
     try:
-        eps.setOperators(K, B2)
-        with OptionsScope(FLUTTER, shift_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank),
-                          options) as scope:
+        if real_form:
+            K_local = (sp.kron(ops.A_local - tau.real * ops.B_local, _I2, format="csr")
+                       + tau.imag * sp.kron(ops.B_local, _J2, format="csr"))
+            K = mat_from_local_csr(pcomm, K_local, 2 * n)
+            eps.setOperators(K, B2)
+            defaults = shift_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank)
+        else:
+            defaults = complex_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank)
+        with OptionsScope(FLUTTER, defaults, {k: v for k, v in (options or {}).items() if k != "real_form"}) as scope:
+            if not real_form:
+                icntl, cntl = mumps_controls(FLUTTER)
+                lo = A.getOwnershipRange()[0]
+                factor = zmumps.ComplexFactor(mpi_comm(pcomm), (ops.A_local - tau * ops.B_local).tocsr(), lo, n,
+                                              icntl=icntl, cntl=cntl)
+                shell = _ComplexInverse(factor, B2)
+                m = 2 * A.getLocalSize()[0]
+                K = PETSc.Mat().createPython(((m, 2 * n), (m, 2 * n)), shell, comm=pcomm)
+                K.setUp()
+                eps.setOperators(K)
             scope.configure(eps)  # setFromOptions, last
             eps.solve()
         nconv = eps.getConverged()
-        info = {"nconv": nconv, "iterations": eps.getIterationNumber()}
-        zr, zi = K.createVecRight(), K.createVecRight()
+        info = {"nconv": nconv, "iterations": eps.getIterationNumber(),
+                "factor": "real 2n" if real_form else "complex"}
+        zr, zi = B2.createVecRight(), B2.createVecRight()
         pairs, seen, radius = [], [], 0.0
-        comm = mpi_comm(A.getComm())
+        comm = mpi_comm(pcomm)
         previous = None
         for i in range(nconv):
-            mu = complex(eps.getEigenvalue(i))
+            theta = complex(eps.getEigenvalue(i))
+            # the complex factor's operator has the eigenvalues 1/(σ − τ), 1/(σ − τ̄)
+            mu = theta if real_form else (1.0 / theta if theta != 0 else complex(np.inf))
             radius = max(radius, abs(mu))
             # SLEPc returns a real form's complex eigenvalues as conjugate pairs, one after the
             # other; the second (eigenvector z̄) maps to the same σ as the first
@@ -224,6 +305,6 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
         info["seconds"] = time.perf_counter() - t0
         return pairs, info
     finally:
-        for obj in (eps, K, B2, zr, zi):
+        for obj in (eps, K, B2, zr, zi, shell, factor):
             if obj is not None:
                 obj.destroy()

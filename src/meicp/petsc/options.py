@@ -65,7 +65,8 @@ PREFIXES = {
     LU: "MUMPS LU solves (KSP/PC)",
     EICP_VI: "SNES VI of the semismooth EiCP method",
     SELFCHECK: "SLEPc EPS of meicp info --check",
-    FLUTTER: "SLEPc EPS/ST (complex shift-and-invert, MUMPS LU) of the flutter search on a large pencil",
+    FLUTTER: ("SLEPc EPS (complex shift-and-invert) of the flutter search on a large pencil; its complex MUMPS "
+              "factor: st_mat_mumps_icntl_<k> / st_mat_mumps_cntl_<k>; real_form: the real 2n LU instead"),
     SCHUR: "MUMPS Schur complements and solves condensing a pencil onto its contact DOFs",
     WINDOW: "SLEPc EPS (Lanczos, no factorisation) estimating the top of the divergence σ-window",
 }
