@@ -51,6 +51,16 @@ def _allreduce(comm, value, op="sum"):
     return comm.allreduce(value, op={"sum": MPI.SUM, "max": MPI.MAX}[op])
 
 
+def _with_basis_and_low_rank(defaults: dict, ncv: int | None, low_rank: float | None) -> dict:
+    """The Krylov basis, when given, and the factor's block-low-rank controls (ICNTL(35) = 2,
+    CNTL(7) = ``low_rank``), added to either form's defaults."""
+    if ncv:
+        defaults["eps_ncv"] = ncv
+    if low_rank:
+        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
+    return defaults
+
+
 def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
     """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
     order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
@@ -63,11 +73,7 @@ def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_ran
                 "eps_tol": tol, "eps_max_it": 500, "st_type": "sinvert", "st_ksp_type": "preonly",
                 "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps", "st_mat_mumps_icntl_7": 2,
                 "st_mat_mumps_icntl_15": -4 if n % 2 == 0 else -2}
-    if ncv:
-        defaults["eps_ncv"] = ncv
-    if low_rank:
-        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
-    return defaults
+    return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
 class SlidingPencilOps:
@@ -175,11 +181,7 @@ def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_r
     without an error; ``low_rank``: block-low-rank factor and solves at that CNTL(7)."""
     defaults = {"eps_type": "krylovschur", "eps_non_hermitian": True, "eps_largest_magnitude": True,
                 "eps_nev": nev, "eps_tol": tol, "eps_max_it": 500, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
-    if ncv:
-        defaults["eps_ncv"] = ncv
-    if low_rank:
-        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
-    return defaults
+    return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
 class _ComplexInverse:
