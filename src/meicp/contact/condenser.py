@@ -35,7 +35,7 @@ from ..lattice.node_blocks import NodeBlocks, node_of
 from ..petsc.eigen import solve_ghep
 from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy
-from ..petsc.schur import MumpsFactor, dense_schur, mumps_factor
+from ..petsc.schur import MumpsFactor, dense_schur, mumps_factor, schur_series
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
 
 #: ``method="auto"`` condenses by solves (rigorous error bound) while |F|·|J| stays below this
@@ -79,6 +79,7 @@ class Condenser:
         self.ready, self.why = False, "not prepared"
         self.seconds: dict = {}
         self._schur0: Condensed | None = None
+        self._series = None  # the Schur complements of 𝓗(σ), one MUMPS analysis for every σ
         self._factor0: MumpsFactor | None = None
         self._solve0 = None
         #: where the windows are split (:func:`~.windows.cover`): half SLEPc's estimate of
@@ -92,10 +93,14 @@ class Condenser:
         self.destroy()
 
     def destroy(self) -> None:
-        """Free the kept MUMPS factor of K̃_FF (collective)."""
+        """Free the kept MUMPS factor of K̃_FF and the Schur complements' MUMPS instance
+        (collective)."""
         if self._factor0 is not None:
             self._factor0.destroy()
             self._factor0 = None
+        if self._series is not None:
+            self._series.destroy()
+            self._series = None
 
     @cached_property
     def blocks_FF(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
@@ -136,7 +141,7 @@ class Condenser:
             if self.ready and self.method == "schur":
                 t = time.perf_counter()
                 solve = refined_solve(factor, KFF)
-                self.relative_error, X = schur_error(self.comm, self.pieces, solve, bordered=self.bordered)
+                self.relative_error, X = schur_error(self.comm, self.pieces, solve, schur=self.schur_at)
                 if keep_factor:
                     self._factor0, self._solve0, factor = factor, solve, None
                 self._schur0 = from_bordered_schur(self.pieces, 0.0, X, self.relative_error)
@@ -164,9 +169,16 @@ class Condenser:
             return condense(self.pieces, sigma, lambda H: factor(self.pad_FF(H)), tau=self.tau, xi=xi)
         if sigma == 0 and self._schur0 is not None:
             return self._schur0
-        H, rows = self.bordered(sigma)
-        X = dense_schur(self.comm, H, rows, symmetric=True)
-        return from_bordered_schur(self.pieces, sigma, X, self.relative_error)
+        return from_bordered_schur(self.pieces, sigma, self.schur_at(sigma), self.relative_error)
+
+    def schur_at(self, sigma: float) -> np.ndarray:
+        """MUMPS' Schur complement of 𝓗(σ) onto its Schur rows (dense, every rank), the MUMPS
+        analysis made once for every σ (:func:`~meicp.petsc.schur.schur_series`).  Collective."""
+        if self._series is None:
+            self.bordered(0.0)  # pads both parts once
+            P0, P1, rows = self._bordered_parts
+            self._series = schur_series(self.comm, P0, P1, rows)
+        return self._series(sigma)
 
     def bordered(self, sigma: float) -> tuple[sp.csr_matrix, np.ndarray]:
         """The pieces' bordered matrix 𝓗(σ) and its Schur rows, padded to node blocks: 𝓗₀ + σ𝓗₁
@@ -287,14 +299,18 @@ def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
     return ""
 
 
-def schur_error(comm, pieces: PencilPieces, solve_KFF, *, bordered=None) -> tuple[float, np.ndarray]:
+def schur_error(comm, pieces: PencilPieces, solve_KFF, *, schur=None) -> tuple[float, np.ndarray]:
     """MUMPS' Schur complement X of the σ = 0 bordered matrix and its relative error, measured
     along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from
     ``solve_KFF`` (a separate factor of K̃_FF); charged ×PROBE_SAFETY, at least
-    SCHUR_ERROR_FLOOR.  ``bordered``: σ → (𝓗(σ), rows), e.g. :meth:`Condenser.bordered` (default
-    ``pieces.bordered``).  Returns ``(relative error, X)``."""
-    H, rows = (bordered or pieces.bordered)(0.0)
-    X = dense_schur(comm, H, rows, symmetric=True)
+    SCHUR_ERROR_FLOOR.  ``schur``: σ → X, e.g. :meth:`Condenser.schur_at` (default: one
+    :func:`~meicp.petsc.schur.dense_schur` of ``pieces.bordered``).  Returns ``(relative
+    error, X)``."""
+    if schur is None:
+        H, rows = pieces.bordered(0.0)
+        X = dense_schur(comm, H, rows, symmetric=True)
+    else:
+        X = schur(0.0)
     G = from_bordered_schur(pieces, 0.0, X, 0.0).G()
     J, F = pieces.J, pieces.F
     rng = np.random.default_rng(14)

@@ -75,7 +75,11 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
         raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
     if np.asarray(pencil.J).size == 0:
         return DivergenceProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
-    cond = Condenser(comm, pencil.model, pencil.maps, method=method)
+    with Condenser(comm, pencil.model, pencil.maps, method=method) as cond:
+        return _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start)
+
+
+def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> DivergenceProof:
     if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
         return DivergenceProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
                                "mass); this pencil couples contact and free DOFs through its mass (a frictional "

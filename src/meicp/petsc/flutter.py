@@ -27,10 +27,10 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from . import import_petsc, import_slepc, zmumps
+from . import import_petsc, import_slepc, mumps_c
 from .comm import mpi_comm
 from .mat import mat_from_local_csr, vec_to_numpy
-from .options import FLUTTER, OptionsScope, PetscOptionError
+from .options import FLUTTER, OptionsScope, mumps_controls
 
 _J2 = sp.csr_matrix(np.array([[0.0, 1.0], [-1.0, 0.0]]))
 _I2 = sp.identity(2, format="csr")
@@ -51,6 +51,16 @@ def _allreduce(comm, value, op="sum"):
     return comm.allreduce(value, op={"sum": MPI.SUM, "max": MPI.MAX}[op])
 
 
+def _with_basis_and_low_rank(defaults: dict, ncv: int | None, low_rank: float | None) -> dict:
+    """The Krylov basis, when given, and the factor's block-low-rank controls (ICNTL(35) = 2,
+    CNTL(7) = ``low_rank``), added to either form's defaults."""
+    if ncv:
+        defaults["eps_ncv"] = ncv
+    if low_rank:
+        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
+    return defaults
+
+
 def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
     """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
     order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
@@ -63,11 +73,7 @@ def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_ran
                 "eps_tol": tol, "eps_max_it": 500, "st_type": "sinvert", "st_ksp_type": "preonly",
                 "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps", "st_mat_mumps_icntl_7": 2,
                 "st_mat_mumps_icntl_15": -4 if n % 2 == 0 else -2}
-    if ncv:
-        defaults["eps_ncv"] = ncv
-    if low_rank:
-        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
-    return defaults
+    return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
 class SlidingPencilOps:
@@ -167,7 +173,7 @@ def diagonal_of(B, B_local=None):
 
 def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
     """Code defaults of one complex shift-and-invert solve with a complex MUMPS factor
-    (:class:`~meicp.petsc.zmumps.ComplexFactor`): SLEPc's Krylov–Schur on the operator
+    (:class:`~meicp.petsc.mumps_c.ComplexFactor`): SLEPc's Krylov–Schur on the operator
     K_τ⁻¹B₂ of the 2n form (nev, ncv there), and the factor's controls under the names the 2n
     form's factor had (``st_mat_mumps_icntl_<k>``, ``st_mat_mumps_cntl_<k>``: MUMPS' own
     numbers).  ICNTL(15) = −2 analyses the graph of DOF pairs (a lattice node) when n is
@@ -175,29 +181,7 @@ def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_r
     without an error; ``low_rank``: block-low-rank factor and solves at that CNTL(7)."""
     defaults = {"eps_type": "krylovschur", "eps_non_hermitian": True, "eps_largest_magnitude": True,
                 "eps_nev": nev, "eps_tol": tol, "eps_max_it": 500, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
-    if ncv:
-        defaults["eps_ncv"] = ncv
-    if low_rank:
-        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
-    return defaults
-
-
-def mumps_controls(prefix: str) -> tuple[dict, dict]:
-    """``(icntl, cntl)``: the ``-<prefix>st_mat_mumps_icntl_<k>`` / ``cntl_<k>`` values in the
-    options database, by MUMPS number (read, so never reported unused)."""
-    PETSc = import_petsc()
-    db = PETSc.Options()
-    icntl, cntl = {}, {}
-    for name in db.getAll():
-        for key, out, get in (("icntl_", icntl, db.getInt), ("cntl_", cntl, db.getReal)):
-            head = f"{prefix}st_mat_mumps_{key}"
-            if name.startswith(head) and name[len(head):].isdigit():
-                try:
-                    out[int(name[len(head):])] = get(name)
-                except PETSc.Error:
-                    raise PetscOptionError(f"-{name} {db.getString(name)!r} is not "
-                                           f"{'an integer' if key == 'icntl_' else 'a number'}") from None
-    return icntl, cntl
+    return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
 class _ComplexInverse:
@@ -227,7 +211,7 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
     shift-and-invert on the real 2n form (every σ of the real form comes with its
     conjugate: nev, ncv are doubled there): Krylov–Schur on K_τ⁻¹B₂ applied through a complex
-    MUMPS factor of A − τB (:mod:`meicp.petsc.zmumps`), or — when no ZMUMPS of a known
+    MUMPS factor of A − τB (:mod:`meicp.petsc.mumps_c`), or — when no ZMUMPS of a known
     version loads, or ``-meicp_flutter_real_form`` is given — SLEPc's own shift-and-invert
     with a real MUMPS LU of K_τ (twice the flops and memory).  Returns ``(pairs, info)``:
     pairs = [(σ with Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info =
@@ -243,7 +227,7 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     n = A.getSize()[0]
     pcomm = A.getComm()
     real_form = bool((options or {}).get("real_form")) or PETSc.Options().getBool(FLUTTER + "real_form", False)
-    if not real_form and zmumps.load()[0] is None:
+    if not real_form and mumps_c.load("z")[0] is None:
         real_form = True
     B2 = mat_from_local_csr(pcomm, sp.kron(ops.B_local, _I2, format="csr"), 2 * n)
     eps = SLEPc.EPS().create(comm=pcomm)
@@ -259,9 +243,9 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
             defaults = complex_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank)
         with OptionsScope(FLUTTER, defaults, {k: v for k, v in (options or {}).items() if k != "real_form"}) as scope:
             if not real_form:
-                icntl, cntl = mumps_controls(FLUTTER)
+                icntl, cntl = mumps_controls(FLUTTER + "st_mat_mumps_")
                 lo = A.getOwnershipRange()[0]
-                factor = zmumps.ComplexFactor(mpi_comm(pcomm), (ops.A_local - tau * ops.B_local).tocsr(), lo, n,
+                factor = mumps_c.ComplexFactor(mpi_comm(pcomm), (ops.A_local - tau * ops.B_local).tocsr(), lo, n,
                                               icntl=icntl, cntl=cntl)
                 shell = _ComplexInverse(factor, B2)
                 m = 2 * A.getLocalSize()[0]

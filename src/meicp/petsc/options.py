@@ -243,6 +243,25 @@ def options_used(name: str) -> bool:
     return bool(flag.value)
 
 
+def mumps_controls(head: str) -> tuple[dict, dict]:
+    """``(icntl, cntl)``: the ``-<head>icntl_<k>`` / ``-<head>cntl_<k>`` values in the options
+    database (e.g. head ``meicp_schur_mat_mumps_``), by MUMPS number, for the MUMPS instances
+    meicp drives itself (:mod:`meicp.petsc.mumps_c`); read, so never reported unused.  A value
+    of the wrong kind is a :class:`PetscOptionError` naming it."""
+    PETSc = import_petsc()
+    db = PETSc.Options()
+    icntl, cntl = {}, {}
+    for name in db.getAll():
+        for key, out, get in (("icntl_", icntl, db.getInt), ("cntl_", cntl, db.getReal)):
+            if name.startswith(head + key) and name[len(head + key):].isdigit():
+                try:
+                    out[int(name[len(head + key):])] = get(name)
+                except PETSc.Error:
+                    raise PetscOptionError(f"-{name} {db.getString(name)!r} is not "
+                                           f"{'an integer' if key == 'icntl_' else 'a number'}") from None
+    return icntl, cntl
+
+
 def configure_and_solve(solver, prefix: str, defaults: dict, options: dict | None, solve) -> tuple:
     """Give a SNES, TAO or KSP its options (code defaults < ``options`` < command line) under
     ``prefix``, call ``solve()`` and return ``(seconds, reason_name, iterations)``."""
