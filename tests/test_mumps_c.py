@@ -141,3 +141,19 @@ def test_the_schur_series_refuses_two_patterns():
     H1.eliminate_zeros()
     with pytest.raises(ValueError, match="one pattern"):
         mumps_c.SchurSeries(None, H0, H1, rows)
+
+
+def test_without_dmumps_the_series_falls_back_to_petsc(monkeypatch):
+    """Where no DMUMPS of a known version loads, schur_series makes one PETSc factorisation
+    per σ: the same Schur complements."""
+    from meicp.petsc import schur
+
+    H0, H1, rows = _bordered()
+    with schur.schur_series(None, H0, H1, rows) as direct:
+        expected = [direct(s) for s in (0.0, 0.7)]
+    real_load = mumps_c.load
+    monkeypatch.setattr(mumps_c, "load", lambda arith="z": (None, "none here") if arith == "d" else real_load(arith))
+    with schur.schur_series(None, H0, H1, rows) as fallback:
+        assert not isinstance(fallback, mumps_c.SchurSeries)
+        for S, sigma in zip(expected, (0.0, 0.7)):
+            assert np.abs(fallback(sigma) - S).max() <= 1e-12 * np.abs(S).max()
