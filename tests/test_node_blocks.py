@@ -96,6 +96,28 @@ def test_the_condensers_bordered_matrix_is_the_pieces_one_padded(states):
         assert H.nnz >= ref.nnz
 
 
+def test_a_mass_part_outside_the_stiffness_pattern_pads_the_union():
+    """When 𝓗₁ has an entry outside 𝓗₀'s padded pattern (not so on a base contact, whose mass
+    is diagonal), the condenser pads the union of both: 𝓗₀ + σ𝓗₁ still value for value."""
+    from meicp.contact.condenser import Condenser
+
+    scene = two_layer_scene(8, (3, 3), mu=1.3, states="slip+", shear=0.5)
+    model = LatticeModel(scene)
+    maps = reduced_system(model, contact_sets(scene, model), ())
+    cond = Condenser(None, model, maps)
+    H0, H1, rows = cond.pieces.bordered_parts()
+    n = H0.shape[0]
+    far = sp.csr_matrix(([0.25, 0.25], ([0, n - 1], [n - 1, 0])), shape=(n, n))  # nodes far apart
+    assert H0[0, n - 1] == 0
+    H1 = (H1 + far).tocsr()
+    cond.pieces.bordered_parts = lambda: (H0, H1, rows)
+    for sigma in (0.0, 0.37):
+        H, got_rows = cond.bordered(sigma)
+        assert np.array_equal(got_rows, rows) and abs(H - (H0 + sigma * H1)).max() == 0.0
+    P0, P1, _ = cond._bordered_parts
+    assert np.array_equal(P0.indices, P1.indices) and P0.nnz > sp.csr_matrix(H0).nnz
+
+
 @pytest.mark.parametrize("contiguous", [True, False])
 def test_the_padded_pattern_couples_whole_groups_and_nothing_else(contiguous):
     # contiguous groups (a node's DOFs are neighbours) take the index-arithmetic path, others
