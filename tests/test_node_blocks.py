@@ -114,7 +114,7 @@ def test_a_mass_part_outside_the_stiffness_pattern_pads_the_union():
     for sigma in (0.0, 0.37):
         H, got_rows = cond.bordered(sigma)
         assert np.array_equal(got_rows, rows) and abs(H - (H0 + sigma * H1)).max() == 0.0
-    P0, P1, _ = cond._bordered_parts
+    P0, P1, _ = cond.padded_parts
     assert np.array_equal(P0.indices, P1.indices) and P0.nnz > sp.csr_matrix(H0).nnz
 
 

@@ -70,7 +70,6 @@ class Condenser:
         nodes = node_of(maps.retained)
         self.pad_FF = NodeBlocks(nodes[F]).pad
         self.pad_bordered = NodeBlocks(np.concatenate([nodes, nodes.max(initial=-1) + 1 + np.arange(J.size)])).pad
-        self._bordered_parts = None
         if method == "auto":
             method = "solves" if F.size * J.size <= SOLVES_LIMIT and self._diagonal_FF() else "schur"
         self.method = method
@@ -175,20 +174,22 @@ class Condenser:
         """MUMPS' Schur complement of 𝓗(σ) onto its Schur rows (dense, every rank), the MUMPS
         analysis made once for every σ (:func:`~meicp.petsc.schur.schur_series`).  Collective."""
         if self._series is None:
-            self.bordered(0.0)  # pads both parts once
-            P0, P1, rows = self._bordered_parts
-            self._series = schur_series(self.comm, P0, P1, rows)
+            self._series = schur_series(self.comm, *self.padded_parts)
         return self._series(sigma)
+
+    @cached_property
+    def padded_parts(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
+        """``(𝓗₀, 𝓗₁, rows)`` of the pieces' bordered matrix, both padded to node blocks on one
+        pattern (the union of theirs), once."""
+        H0, H1, rows = self.pieces.bordered_parts()
+        self.pad_bordered((abs(H0) + abs(H1)).tocsr())  # the union of both patterns, padded
+        return self.pad_bordered(H0), self.pad_bordered(H1), rows
 
     def bordered(self, sigma: float) -> tuple[sp.csr_matrix, np.ndarray]:
         """The pieces' bordered matrix 𝓗(σ) and its Schur rows, padded to node blocks: 𝓗₀ + σ𝓗₁
         on one pattern, both padded once (a matrix product and a padding per σ cost 0.5 s at 10⁶
         DOFs); the same values as ``pieces.bordered(σ)``."""
-        if self._bordered_parts is None:
-            H0, H1, rows = self.pieces.bordered_parts()
-            self.pad_bordered((abs(H0) + abs(H1)).tocsr())  # the union of both patterns, padded
-            self._bordered_parts = (self.pad_bordered(H0), self.pad_bordered(H1), rows)
-        P0, P1, rows = self._bordered_parts
+        P0, P1, rows = self.padded_parts
         return sp.csr_matrix((P0.data + sigma * P1.data, P0.indices, P0.indptr), shape=P0.shape), rows
 
     def error_text(self) -> str:

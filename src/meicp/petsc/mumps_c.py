@@ -29,6 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core.errors import ProblemError
+from .mat import ownership
 
 _INT, _INT8, _REAL, _PTR = C.c_int, C.c_int64, C.c_double, C.c_void_p
 _PINT = C.POINTER(C.c_int)
@@ -225,9 +226,7 @@ class SchurSeries(_Instance):
             self.destroy()
             raise ValueError("SchurSeries needs H₀ and H₁ on one pattern")
         n = H0.shape[0]
-        size = 1 if comm is None else comm.Get_size()
-        rank = 0 if comm is None else comm.Get_rank()
-        lo, hi = n * rank // size, n * (rank + 1) // size
+        lo, hi = (0, n) if comm is None else ownership(n, comm.Get_rank(), comm.Get_size())
         local0, local1 = H0[lo:hi].tocoo(), H1[lo:hi].tocoo()
         upper = local0.col >= local0.row + lo  # a symmetric matrix gives one triangle (MUMPS sums both)
         self._h0, self._h1 = local0.data[upper].astype(float), local1.data[upper].astype(float)
