@@ -47,9 +47,10 @@ def test_proofs_agree_with_serial(method):
         assert par.proved is ser.proved is proved
         assert par.test == ser.test and par.window == ser.window
         assert par.margin == pytest.approx(ser.margin, rel=1e-6, abs=1e-9)
-        # the same windows and τ (the Schur path sharpens τ on request, served to rank 1 like a σ)
+        # the same windows and τ (the Schur path certifies its sharp τ while proving the
+        # lattice held, on the series' own instance: no sharper τ is asked for after)
         assert par.statement.split(";")[0] == ser.statement.split(";")[0]
-        assert ("tau" in par.seconds) == ("tau" in ser.seconds) == (method == "schur" and proved)
+        assert "tau" not in par.seconds and "tau" not in ser.seconds
 
 
 def test_critical_friction_bracket_on_two_ranks_matches_serial():
@@ -85,3 +86,20 @@ def test_an_error_inside_a_served_condensation_leaves_both_ranks_in_step(monkeyp
     monkeypatch.undo()
     cf = critical_friction(two_layer_scene(30, (2, 2), mu=1.0, states="slip-", shear=0.5), comm=comm)
     assert cf.exact and comm.allgather(float(cf))[0] == comm.allgather(float(cf))[1]
+
+
+@pytest.mark.parametrize("need_tau", [True, False])
+def test_a_lattice_not_held_is_refused_on_both_ranks_and_they_stay_in_step(need_tau):
+    from meicp.contact.condenser import Condenser
+
+    comm = MPI.COMM_WORLD
+    scene = two_layer_scene(6, (2, 2), mu=1.0, states=["slip+"] + ["separated"] * 5, top="free")
+    model = LatticeModel(scene)
+    with Condenser(comm, model, reduced_system(model, contact_sets(scene, model), ()), method="schur") as cond:
+        assert not cond.prepare(need_tau=need_tau) and "not held" in cond.why
+    assert comm.allreduce(1) == comm.Get_size()
+    held = two_layer_scene(20, (2, 2), mu=1.0, states="slip+", shear=0.5)
+    model = LatticeModel(held)
+    with Condenser(comm, model, reduced_system(model, contact_sets(held, model), ()), method="schur") as cond:
+        assert cond.prepare(need_tau=need_tau) and cond.tau > 0
+        assert comm.allreduce(cond.tau, op=MPI.MAX) == comm.allreduce(cond.tau, op=MPI.MIN)

@@ -157,3 +157,50 @@ def test_without_dmumps_the_series_falls_back_to_petsc(monkeypatch):
         assert not isinstance(fallback, mumps_c.SchurSeries)
         for S, sigma in zip(expected, (0.0, 0.7)):
             assert np.abs(fallback(sigma) - S).max() <= 1e-12 * np.abs(S).max()
+
+
+def _interior_matches(comm):
+    """The interior block H_II (every row not a Schur row) on the series' own instance: its
+    inertia, full rank with a diagonal shift, is the dense one at shifts between the pencil's
+    eigenvalues, and its solves are the dense ones (a vector or a block, after a block-low-rank
+    factorisation too), the Schur rows of the solution 0."""
+    import scipy.linalg as sl
+
+    H0, H1, rows = _bordered()
+    n = H0.shape[0]
+    rest = np.setdiff1d(np.arange(n), rows)
+    K, M = H0.toarray()[np.ix_(rest, rest)], H1.toarray()[np.ix_(rest, rest)]
+    lam = sl.eigh(K, M, eigvals_only=True)
+    host = comm is None or comm.Get_rank() == 0
+    shift = np.zeros(n)
+    shift[rest] = -1e-6 * np.abs(np.diag(K))
+    b = np.random.default_rng(8).standard_normal((n, 2))
+    with mumps_c.SchurSeries(comm, H0, H1, rows) as series:
+        for t, count in ((0.5 * lam[0], 0), (0.5 * (lam[2] + lam[3]), 3)):
+            negative, null = series.factor(-t, diagonal=shift, exact=True)
+            dense = K - t * M + np.diag(shift[rest])
+            assert negative == count == int((np.linalg.eigvalsh(dense) < 0).sum()) and null == 0
+            assert series.factored == (-t, True, True)
+            x = series.solve(b if host else None)
+            if host:
+                assert np.abs(x[rest] - np.linalg.solve(dense, b[rest])).max() <= 1e-10 * np.abs(x).max()
+                assert not x[rows].any()
+            else:
+                assert x is None
+        series.factor(0.3)  # the series' own block-low-rank factorisation
+        x = series.solve(b[:, 0] if host else None)
+        if host:
+            assert x.shape == (n,)
+            assert np.abs(x[rest] - np.linalg.solve(K + 0.3 * M, b[rest, 0])).max() <= 1e-10 * np.abs(x).max()
+        shift[rows[-1]] = 1.0  # an extra row: no diagonal entry in the pattern
+        with pytest.raises(ValueError, match="no diagonal entry"):
+            series.factor(0.0, diagonal=shift)
+
+
+def test_the_series_interior_inertia_and_solves():
+    _interior_matches(None)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_the_series_interior_inertia_and_solves_on_two_ranks(comm):
+    _interior_matches(comm)

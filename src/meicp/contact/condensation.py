@@ -219,10 +219,11 @@ def from_bordered_schur(pieces: PencilPieces, sigma: float, X: np.ndarray, relat
     S = 0.5 * (X[:nJ, :nJ] + X[:nJ, :nJ].T)
     R = np.array(X[nJ:, :nJ])
     Z = -0.5 * (X[nJ:, nJ:] + X[nJ:, nJ:].T)
-    Hs = (sigma * pieces.Mt + pieces.Kt).tocsr()
-    P = (sigma * pieces.NM + pieces.N).tocsr()
-    KK = Hs[J][:, J].toarray() - S
-    NK = P[J][:, J].toarray() - R
+    # only the J × J blocks: rows J first (σM̃ + K̃ over every row cost 0.1 s per σ at 10⁶ DOFs)
+    Hs_JJ = (sigma * pieces.Mt[J] + pieces.Kt[J]).tocsc()[:, J]
+    P_JJ = (sigma * pieces.NM[J] + pieces.N[J]).tocsc()[:, J]
+    KK = Hs_JJ.toarray() - S
+    NK = P_JJ.toarray() - R
     scale = max(np.abs(S).max(), np.abs(R).max() if R.size else 0.0, 1e-300)
     e = relative_error * scale * nJ  # entrywise → ‖·‖₂ (≤ n·max entry)
     return Condensed(float(sigma), S, R, e, e, "measured", Z, e, KK, NK)

@@ -137,7 +137,7 @@ def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=No
         return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
                 f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
     cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale,
-                sharper_tau=sharper_tau)
+                sharper_tau=sharper_tau, scalings={0.0: d})
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])

@@ -13,6 +13,8 @@ import numpy as np
 
 from ..core.errors import ConvergenceError
 from . import import_petsc, import_slepc
+from .comm import mpi_comm
+from .mat import ownership
 from .options import GHEP, OptionsScope
 
 
@@ -96,3 +98,63 @@ def solve_ghep(A, B, nev: int = 4, target: float = 0.0, *, prefix: str = GHEP,
             detached.destroy()
         eps.destroy()
         PETSc.garbage_cleanup() if hasattr(PETSc, "garbage_cleanup") else None
+
+
+class _WeightedInverse:
+    """The MATSHELL y ↦ W^½ K⁻¹ W^½ y (W a positive diagonal, its root ``root`` on this
+    rank's rows) with K⁻¹ applied on rank 0 by ``solve_on_host`` (a whole vector in, the
+    whole solution out on rank 0, None elsewhere; collective)."""
+
+    def __init__(self, comm, solve_on_host, root: np.ndarray, counts: np.ndarray | None):
+        self.comm, self.solve, self.root, self.counts = comm, solve_on_host, root, counts
+        self.host = comm is None or comm.Get_rank() == 0
+        self.whole = np.zeros(int(counts.sum()) if counts is not None else root.size) if self.host else None
+
+    def mult(self, mat, x, y):
+        local = x.getArray(readonly=True) * self.root
+        if self.comm is None or self.comm.Get_size() == 1:
+            self.whole[:] = local
+        else:
+            self.comm.Gatherv(local, [self.whole, self.counts] if self.host else None, root=0)
+        solution = self.solve(self.whole if self.host else None)
+        out = y.getArray()
+        if self.comm is None or self.comm.Get_size() == 1:
+            out[:] = solution
+        else:
+            self.comm.Scatterv([np.ascontiguousarray(solution), self.counts] if self.host else None, out, root=0)
+        out *= self.root
+
+
+def inverse_estimate(pcomm, solve_on_host, weights: np.ndarray, *, prefix: str, options: dict | None = None) -> float:
+    """SLEPc's estimate of the smallest eigenvalue of (K, diag(weights)), K symmetric positive
+    definite known only through ``solve_on_host`` (rank 0 holds the right-hand side and gets
+    the solution, as with an interior solve of :class:`meicp.petsc.mumps_c.SchurSeries`):
+    1/θ for the largest θ of the symmetric W^½K⁻¹W^½, Krylov–Schur (HEP) on a MATSHELL.
+    ``weights``: every rank holds all of them (positive).  ``options`` (keys without the
+    prefix) over the loose defaults of an estimate; 0.0 when SLEPc does not converge — an
+    estimate places things, it proves nothing.  Collective on the PETSc communicator."""
+    PETSc = import_petsc()
+    SLEPc = import_slepc()
+    comm = mpi_comm(pcomm)
+    n = int(weights.size)
+    size, rank = pcomm.getSize(), pcomm.getRank()
+    lo, hi = ownership(n, rank, size)
+    counts = np.array([np.diff(ownership(n, r, size))[0] for r in range(size)]) if size > 1 else None
+    shell = _WeightedInverse(comm if size > 1 else None, solve_on_host, np.sqrt(weights[lo:hi]), counts)
+    op = PETSc.Mat().createPython(((hi - lo, n), (hi - lo, n)), shell, comm=pcomm)
+    op.setUp()
+    eps = SLEPc.EPS().create(comm=pcomm)
+    try:
+        eps.setOperators(op)
+        defaults = {"eps_type": "krylovschur", "eps_hermitian": True, "eps_largest_magnitude": True,
+                    "eps_nev": 1, "eps_ncv": 6, "eps_tol": 1e-3, "eps_max_it": 100}
+        with OptionsScope(prefix, defaults, options) as scope:
+            scope.configure(eps)
+            eps.solve()
+        if eps.getConverged() < 1:
+            return 0.0
+        theta = eps.getEigenvalue(0).real
+        return float(1.0 / theta) if theta > 0 else 0.0
+    finally:
+        eps.destroy()
+        op.destroy()

@@ -90,7 +90,9 @@ def load(arith: str = "z"):
 class MumpsError(ProblemError):
     """MUMPS returned INFOG(1) < 0 (the same on every rank: MUMPS reports it globally, so
     every rank raises and none is left waiting), or no usable MUMPS was found, or a control
-    was refused before MUMPS read anything."""
+    was refused before MUMPS read anything.  ``code``: INFOG(1), 0 when MUMPS did not run."""
+
+    code = 0
 
 
 class _Instance:
@@ -151,8 +153,10 @@ class _Instance:
         self.id.job = job
         self.entry(C.byref(self.id))
         if self.id.infog[0] < 0:
-            raise MumpsError(f"the {self.what} failed (MUMPS job {job}: INFOG(1) = {self.id.infog[0]}, INFOG(2) = "
-                             f"{self.id.infog[1]}, MUMPS users' guide §8); check the {self.option}* options")
+            error = MumpsError(f"the {self.what} failed (MUMPS job {job}: INFOG(1) = {self.id.infog[0]}, INFOG(2) = "
+                               f"{self.id.infog[1]}, MUMPS users' guide §8); check the {self.option}* options")
+            error.code = int(self.id.infog[0])
+            raise error
 
     def destroy(self) -> None:
         if self.id is not None:
@@ -214,11 +218,18 @@ class SchurSeries(_Instance):
     order) of the symmetric matrix H₀ + σH₁ (SciPy CSR, one pattern, every rank holds both),
     on every rank — DMUMPS LDLᵀ (general symmetric: indefinite allowed, H_FF must factor
     without pivoting into the Schur rows, which holds when it is definite), one analysis for
-    every σ.  ``icntl``, ``cntl``: after ``defaults``.  Collective; a context manager."""
+    every σ.  The same instance serves the interior block H_II (every row not a Schur row):
+    :meth:`factor` gives its inertia (a proof with ``exact``), :meth:`solve` solves with it.
+    ``icntl``, ``cntl``: after ``defaults``.  Collective; a context manager."""
+
+    #: the interior solves and inertias of :meth:`solve` and :meth:`factor` (the PETSc fallback
+    #: of :func:`meicp.petsc.schur.schur_series` has neither)
+    interior = True
 
     def __init__(self, comm, H0: sp.csr_matrix, H1: sp.csr_matrix, rows: np.ndarray, *, defaults: dict | None = None,
                  icntl: dict | None = None, cntl: dict | None = None):
-        super().__init__(comm, "d", 2, {19: 1, **(defaults or {})}, icntl, cntl,
+        # ICNTL(13) = 1: no ScaLAPACK root, whose pivots INFOG(12) would not count
+        super().__init__(comm, "d", 2, {13: 1, 19: 1, **(defaults or {})}, icntl, cntl,
                          "Schur complement of the condensation", "-meicp_schur_mat_mumps_")
         H0, H1 = sp.csr_matrix(H0), sp.csr_matrix(H1)
         if H0.shape != H1.shape or not (np.array_equal(H0.indptr, H1.indptr)
@@ -230,8 +241,12 @@ class SchurSeries(_Instance):
         local0, local1 = H0[lo:hi].tocoo(), H1[lo:hi].tocoo()
         upper = local0.col >= local0.row + lo  # a symmetric matrix gives one triangle (MUMPS sums both)
         self._h0, self._h1 = local0.data[upper].astype(float), local1.data[upper].astype(float)
-        self._rows(np.ascontiguousarray(local0.row[upper] + lo + 1, dtype=np.int32),
-                   np.ascontiguousarray(local0.col[upper] + 1, dtype=np.int32), self._h0.copy(), n)
+        rows_upper, cols_upper = local0.row[upper] + lo, local0.col[upper]
+        self._rows(np.ascontiguousarray(rows_upper + 1, dtype=np.int32),
+                   np.ascontiguousarray(cols_upper + 1, dtype=np.int32), self._h0.copy(), n)
+        on_diagonal = rows_upper == cols_upper
+        self._diagonal_at, self._diagonal_row = np.flatnonzero(on_diagonal), rows_upper[on_diagonal]
+        self._lo, self._hi, self.n = lo, hi, n
         self._listvar = np.ascontiguousarray(np.asarray(rows) + 1, dtype=np.int32)
         self.m = self._listvar.size
         self.id.size_schur = self.m
@@ -239,18 +254,81 @@ class SchurSeries(_Instance):
         self._schur = np.zeros(self.m * self.m if self.host else 1)
         self.id.schur = self._schur.ctypes.data
         self._analysed = False
+        #: (σ, shifted, exact) of the matrix factorised last (None before the first)
+        self.factored: tuple | None = None
 
     def __call__(self, sigma: float) -> np.ndarray:
-        np.multiply(self._h1, sigma, out=self._a)
-        self._a += self._h0
-        self._run(2 if self._analysed else 4)
-        self._analysed = True
+        self.factor(sigma)
+        return self.schur_complement()
+
+    def schur_complement(self) -> np.ndarray:
+        """The Schur complement of the matrix factorised last, on every rank.  Collective."""
         S = None
         if self.host:
             # ICNTL(19) = 1, symmetric: the lower triangle, by rows
             low = np.tril(self._schur.reshape(self.m, self.m))
             S = low + np.tril(low, -1).T
         return S if self.comm is None else self.comm.bcast(S, root=0)
+
+    def factor(self, sigma: float, *, diagonal: np.ndarray | None = None, exact: bool = False) -> tuple[int, int]:
+        """Factorise H₀ + σH₁ + diag(``diagonal``) (a vector of order n every rank holds, added
+        on the pattern's diagonal; its Schur complement is computed, not read) and return the
+        interior's ``(negative, null)`` pivot counts (INFOG(12), INFOG(28)).  ``exact``: this
+        factorisation full rank (ICNTL(35) = 0: the series' block low rank is an approximation
+        whose inertia proves nothing) and with null pivot detection (ICNTL(24) = 1), for an
+        inertia that is a proof up to rounding.  Collective."""
+        np.multiply(self._h1, sigma, out=self._a)
+        self._a += self._h0
+        if diagonal is not None:
+            diagonal = np.asarray(diagonal, dtype=float)
+            mine = np.zeros(self._hi - self._lo, dtype=bool)
+            mine[self._diagonal_row - self._lo] = True
+            outside = bool(np.any(diagonal[self._lo:self._hi][~mine] != 0))
+            if self.comm is not None and self.comm.Get_size() > 1:  # every rank raises, none waits in MUMPS
+                outside = self.comm.allreduce(outside, op=_lor())
+            if outside:
+                raise ValueError("SchurSeries.factor: a diagonal shift where the pattern has no diagonal entry")
+            self._a[self._diagonal_at] += diagonal[self._diagonal_row]
+        if not self._analysed:  # with the series' own controls: block low rank is chosen here
+            self._run(1)
+            self._analysed = True
+        saved = (self.id.icntl[34], self.id.icntl[23])
+        if exact:
+            self.id.icntl[34], self.id.icntl[23] = 0, 1
+        try:
+            self._run(2)
+        finally:
+            self.id.icntl[34], self.id.icntl[23] = saved
+        self.factored = (float(sigma), diagonal is not None, exact)
+        null = int(self.id.infog[27]) if exact else 0
+        return int(self.id.infog[11]), null
+
+    def solve(self, rhs: np.ndarray | None) -> np.ndarray | None:
+        """``x`` with H_II x_I = b_I for the matrix factorised last (JOB = 3, ICNTL(26) = 0: the
+        interior problem; b's Schur rows are ignored, x's are 0).  ``rhs``: order n, a vector
+        or a block of columns, read on the host (the other ranks may pass None); returns the
+        solution on the host, None elsewhere.  Collective."""
+        if self.factored is None:
+            raise RuntimeError("SchurSeries.solve before any factorisation")
+        block = None
+        if self.host:
+            rhs = np.asarray(rhs, dtype=float)
+            block = np.array(rhs.reshape(self.n, -1), dtype=float, order="F")
+            block[self._listvar - 1] = 0.0
+            self.id.nrhs, self.id.lrhs = block.shape[1], self.n
+            self.id.rhs = block.ctypes.data
+        self.id.icntl[25] = 0
+        self._run(3)
+        if not self.host:
+            return None
+        block[self._listvar - 1] = 0.0
+        return block[:, 0] if rhs.ndim == 1 else block
+
+
+def _lor():
+    from mpi4py import MPI
+
+    return MPI.LOR
 
 
 def _self_comm() -> int:

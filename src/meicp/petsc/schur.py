@@ -155,6 +155,8 @@ def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
 
 
 class _SchurByPetsc:
+    interior = False  # no interior solves or inertias (mumps_c.SchurSeries has them)
+
     def __init__(self, comm, H0, H1, rows):
         self.comm, self.H0, self.H1, self.rows = comm, sp.csr_matrix(H0), sp.csr_matrix(H1), rows
 
