@@ -254,4 +254,18 @@ def test_without_dmumps_the_condenser_proves_what_it_proves_on_its_series(monkey
     monkeypatch.setattr(mumps_c, "load", lambda arith="z": (None, "none here") if arith == "d" else real_load(arith))
     by_petsc = prove_no_divergence(None, pencil(scene), np.inf, method="schur")
     assert on_series.proved and by_petsc.proved and on_series.test == by_petsc.test == "condensed-windows"
-    assert "tau" not in on_series.seconds  # its τ is sharp from the start: no inertia asked for after
+
+
+def test_an_estimate_past_lambda_min_falls_back_to_the_tiny_tau(monkeypatch):
+    """Half an estimate of λ_min that is not below λ_min is not certified (the full-rank inertia
+    of K̃_FF − tM̃_FF − 2ηD has negative pivots): the proof falls back to t = 0, a τ at the
+    rounding level, still certified, while the windows are still split at half the estimate."""
+    from meicp.contact import condenser
+
+    scene = two_layer_scene(40, (3, 3), mu=1.0, states="slip+", shear=0.5)
+    with _condenser(scene) as cond:
+        KFF, MFF = cond.blocks_FF
+        lam = eigh(KFF.toarray(), MFF.toarray(), eigvals_only=True, subset_by_index=[0, 0])[0]
+        monkeypatch.setattr(condenser, "inverse_estimate", lambda *a, **k: 10.0 * lam)
+        assert cond.prepare(need_tau=True)
+        assert 0 < cond.tau < 1e-6 * lam and cond.tau_scale == 5.0 * lam

@@ -175,7 +175,9 @@ def _interior_matches(comm):
     shift = np.zeros(n)
     shift[rest] = -1e-6 * np.abs(np.diag(K))
     b = np.random.default_rng(8).standard_normal((n, 2))
-    with mumps_c.SchurSeries(comm, H0, H1, rows) as series:
+    # the condenser's own controls: block low rank chosen at the analysis, switched off for the
+    # exact factorisations only
+    with mumps_c.SchurSeries(comm, H0, H1, rows, defaults={35: 2}, cntl={7: 1e-14}) as series:
         for t, count in ((0.5 * lam[0], 0), (0.5 * (lam[2] + lam[3]), 3)):
             negative, null = series.factor(-t, diagonal=shift, exact=True)
             dense = K - t * M + np.diag(shift[rest])
@@ -187,7 +189,7 @@ def _interior_matches(comm):
                 assert not x[rows].any()
             else:
                 assert x is None
-        series.factor(0.3)  # the series' own block-low-rank factorisation
+        series.factor(0.3)  # the series' own controls again (block low rank)
         x = series.solve(b[:, 0] if host else None)
         if host:
             assert x.shape == (n,)
@@ -204,3 +206,18 @@ def test_the_series_interior_inertia_and_solves():
 @pytest.mark.mpi(min_size=2)
 def test_the_series_interior_inertia_and_solves_on_two_ranks(comm):
     _interior_matches(comm)
+
+
+def test_a_library_of_another_version_is_not_loaded(monkeypatch):
+    """A MUMPS whose structure may differ from MUMPS_STRUC_C is refused by load() with its
+    version named, so the callers fall back (PETSc's Schur complements, the real 2n form)
+    instead of raising later."""
+    from meicp.petsc import schur
+
+    monkeypatch.setattr(mumps_c, "_LIBS", {})
+    monkeypatch.setattr(mumps_c, "_version_of", lambda entry: "5.7.3")
+    entry, why = mumps_c.load("d")
+    assert entry is None and "5.7.3" in why and "5.5" in why
+    H0, H1, rows = _bordered()
+    with schur.schur_series(None, H0, H1, rows) as fallback:
+        assert not isinstance(fallback, mumps_c.SchurSeries)

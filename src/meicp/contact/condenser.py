@@ -18,14 +18,16 @@ Two ways (``method``):
   its interior block at σ = 0, which is K̃_FF, and one full-rank factorisation of its interior
   shifted by −t·M̃_FF − 2ηD proves by its inertia that the lattice is held and certifies the
   τ the σ-windows need (there were three factorisations with three analyses: K̃_FF, its
-  inertia, τM̃_FF − K̃_FF).  Without a MUMPS C library of a known version, PETSc's factors do
-  it (:func:`held_factor`, :meth:`Condenser.sharper_tau`).
+  inertia, τM̃_FF − K̃_FF).  Where no DMUMPS library of a known version loads
+  (:func:`meicp.petsc.mumps_c.load`), PETSc's factors do it (:func:`held_factor`,
+  :func:`estimate_lambda_min`, :meth:`Condenser.sharper_tau`: only this fallback uses them).
 
 ``"auto"``: solves while |F|·|J| ≤ ``SOLVES_LIMIT`` and the mass is diagonal, else Schur.
 Collective on ``comm`` (every rank holds the SciPy pieces; MUMPS factors them distributed).
 """
 from __future__ import annotations
 
+import logging
 import time
 from contextlib import nullcontext
 from functools import cached_property
@@ -45,6 +47,8 @@ from ..petsc.options import SCHUR
 from ..petsc.schur import MumpsFactor, dense_schur, mumps_factor, schur_series
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
 
+log = logging.getLogger("meicp")
+
 #: ``method="auto"`` condenses by solves (rigorous error bound) while |F|·|J| stays below this
 SOLVES_LIMIT = 2e7
 #: the Schur complement's measured relative error is charged this many times over
@@ -56,7 +60,7 @@ SCHUR_ERROR_FLOOR = 1e-13
 TAU_EPS = {"eps_tol": 1e-2, "eps_ncv": 6, "eps_purify": False}
 #: MUMPS' INFOG(1) for a numerically singular matrix
 SINGULAR = -10
-#: iterative refinement steps of a solve with K̃_FF on the factor of K̃_FF − 2ηD (:func:`refined_solve`)
+#: iterative refinement steps of a solve with K̃_FF on a nearby factor (:func:`refined_solve`)
 REFINE_STEPS = 4
 
 
@@ -92,7 +96,8 @@ class Condenser:
         self._factor0: MumpsFactor | None = None
         self._solve0 = None
         #: where the windows are split (:func:`~.windows.cover`): half SLEPc's estimate of
-        #: λ_min(K̃_FF, M̃_FF), not certified (the certified bound is ``tau``)
+        #: λ_min(K̃_FF, M̃_FF), or the certified ``tau`` when that is larger (on the Schur
+        #: series' instance, where half the estimate is certified, the two are equal)
         self.tau_scale: float | None = None
 
     def __enter__(self) -> "Condenser":
@@ -178,8 +183,10 @@ class Condenser:
           measure its error along the probes (refined against K̃_FF), give the estimate, and
           are kept for :meth:`factor_FF`.
 
-        Two factorisations; the PETSc way made three, each with its analysis (held factor, G(0)
-        and the sharper τ: 14.6 s at 10⁶ DOFs)."""
+        Two factorisations (three where t = ½·estimate is not certified); the PETSc way made
+        three, each with its analysis (held factor, G(0) and the sharper τ: 14.6 s at 10⁶ DOFs).
+        The solves with K̃_FF are always kept (``keep_factor`` costs nothing here): used after
+        the series has factored another matrix, they factor 𝓗(0) again first."""
         clock = time.perf_counter()
         series, pieces = self.series, self.pieces
         KFF, MFF = self.blocks_FF
@@ -192,7 +199,13 @@ class Condenser:
         shift[F] = -2.0 * eta * d
 
         def held(t: float) -> bool:
-            negative, null = series.factor(-t, diagonal=shift, exact=True)
+            try:
+                negative, null = series.factor(-t, diagonal=shift, exact=True)
+            except MumpsError as error:  # e.g. more delayed pivots than the analysis foresaw
+                if t == 0:               # (an estimate past λ_min: K̃_FF − tM̃_FF indefinite)
+                    raise
+                log.info("condenser: the factorisation at t = %.3g failed (%s); t = 0 next", t, error)
+                return False
             if negative or null:
                 self.ready, self.why = False, (
                     f"K̃_FF is not proved positive definite ({negative + null} pivot(s) of K̃_FF − 2η·diag (η = "
@@ -239,7 +252,9 @@ class Condenser:
             if not (estimate > 0 and held(0.5 * estimate)) and not held(0.0):
                 lap("held")
                 return False
-            self.tau_scale = self.tau
+            # where the windows are split: the certified τ, or half the estimate where that was
+            # not certified (a placement, not a bound: an η-level τ would split at a tiny scale)
+            self.tau_scale = max(self.tau, 0.5 * estimate)
             lap("held")
         return self.ready
 
@@ -366,10 +381,12 @@ def estimate_lambda_min(factor: MumpsFactor, MFF) -> float:
         return max(float(pairs.values[0]), 0.0)
 
 
-def refined_solve(factor: MumpsFactor, KFF, steps: int = REFINE_STEPS):
-    """Solves with K̃_FF itself from the factor of K̃_FF − 2ηD: iterative refinement, each step
-    dividing the error by about λ_min(K̃_FF)/(2η·max D) (≈ 10⁶ on the lattices measured), so
-    a few steps reach rounding; it stops when the residual no longer shrinks."""
+def refined_solve(factor, KFF, steps: int = REFINE_STEPS):
+    """Solves with K̃_FF itself from a nearby factor (``factor.solve``): that of K̃_FF − 2ηD
+    (:func:`held_factor`), each step dividing the error by about λ_min(K̃_FF)/(2η·max D) (≈ 10⁶
+    on the lattices measured), or the Schur series' block-low-rank one of K̃_FF
+    (:class:`_InteriorSolve`); a few steps of iterative refinement reach rounding, and it
+    stops when the residual no longer shrinks."""
     def solve(rhs: np.ndarray) -> np.ndarray:
         x = factor.solve(rhs)
         last = np.inf

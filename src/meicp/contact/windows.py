@@ -148,10 +148,13 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
     certifies a larger τ (e.g. ``scale``) at the cost of a factorisation, returning it (or the
     old τ); called at most once, before the first chord it would tighten by a tenth or more.
     ``d_seed``: the starting scaling of every sample's optimisation (e.g. the critical-friction
-    bracket's D, near-optimal at σ = 0).  ``scalings``: optimised scalings already known, by σ
-    (e.g. the caller's own at σ = 0: optimising again from it gains nothing, 1 s at |J| = 1,000).  The first windows split [0, σ_max] uniformly in
-    log(σ + scale) into ``initial`` pieces (with σ_max = ∞: [0, ∞) first); a failed window is
-    split at the geometric mean of its σ + scale ends, until ``max_samples`` condensations.
+    bracket's D, near-optimal at σ = 0), and the first tried on every window; a window it misses
+    by more than ``HOPELESS_DEFICIT`` times its own margin at σ_a is split without optimising a
+    scaling for σ_a.  ``scalings``: optimised scalings already known, by σ (e.g. the caller's
+    own at σ = 0: optimising again from it gains nothing, 1 s at |J| = 1,000).  The first
+    windows split [0, σ_max] uniformly in log(σ + scale) into ``initial`` pieces (with
+    σ_max = ∞: [0, ∞) first); a failed window is split at the geometric mean of its σ + scale
+    ends, until ``max_samples`` condensations.
     """
     t0 = time.perf_counter()
     cache, d_cache = {}, dict(scalings or {})
@@ -181,10 +184,12 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
         return slack_cache[s]
 
     def split(a, b):
+        """The two halves of [a, b] in log(σ + scale), or [] where rounding (or a zero scale)
+        leaves no point strictly inside: the cover then stops there instead of looping."""
         mid = 2.0 * a + s_split if not np.isfinite(b) else np.sqrt((a + s_split) * (b + s_split)) - s_split
         if not np.isfinite(b) and a == 0:
             mid = 1.0
-        return [(a, mid), (mid, b)]
+        return [(a, mid), (mid, b)] if a < mid < b else []
 
     slack_cache = {}
     out = Cover(False)
@@ -213,11 +218,14 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
                 continue
             slack = seed_slack(a)
             log.debug("window [%.4g, %.4g]: the seed misses by %.3g, its margin at σ_a %.3g", a, b, -best[0], slack)
-            if slack > 0 and -best[0] > HOPELESS_DEFICIT * slack and len(cache) < max_samples:
+            halves = split(a, b)
+            if (slack > 0 and -best[0] > HOPELESS_DEFICIT * slack and halves and len(cache) < max_samples
+                    and (a not in d_cache or d_cache[a] is d_seed)):
                 # missed by far more than the sample's own slack, which a better scaling only
                 # raises: split at once (at 10⁶ DOFs the optimised scaling of a sample, 1 s,
-                # proved no window that the seed did not prove after the split)
-                pending[:0] = split(a, b)
+                # proved no window that the seed did not prove after the split); a scaling
+                # already optimised for σ_a costs only its certificates, and is tried
+                pending[:0] = halves
                 continue
         dopt = scaling(a)
         # the scaling that best proves sym(DG(σ_a)) ≻ 0 may have a range that inflates
@@ -234,11 +242,13 @@ def cover(condense_at, mu: float, tau: float, *, sigma_max: float = np.inf, max_
             out.windows.append((a, b, best[0], best[1]))
             continue
         # no window can start at a sample that is not itself certified: stop splitting
-        if not pd_certificate(ca.G(mu), ca.error(mu), dopt, tol=tol).proved or len(cache) >= max_samples:
+        halves = split(a, b)
+        if (not pd_certificate(ca.G(mu), ca.error(mu), dopt, tol=tol).proved or len(cache) >= max_samples
+                or not halves):
             margin = best[0] if np.isfinite(best[0]) else window_certificate(ca, cb, mu, dopt, tau, tol)[0]
             out.failed = (a, b, margin)
             break
-        pending[:0] = split(a, b)
+        pending[:0] = halves
     else:
         out.proved = True
     out.samples = sorted(cache)

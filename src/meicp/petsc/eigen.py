@@ -131,8 +131,8 @@ def inverse_estimate(pcomm, solve_on_host, weights: np.ndarray, *, prefix: str, 
     the solution, as with an interior solve of :class:`meicp.petsc.mumps_c.SchurSeries`):
     1/θ for the largest θ of the symmetric W^½K⁻¹W^½, Krylov–Schur (HEP) on a MATSHELL.
     ``weights``: every rank holds all of them (positive).  ``options`` (keys without the
-    prefix) over the loose defaults of an estimate; 0.0 when SLEPc does not converge — an
-    estimate places things, it proves nothing.  Collective on the PETSc communicator."""
+    prefix) over the loose defaults of an estimate; 0.0 when SLEPc fails or does not converge —
+    an estimate places things, it proves nothing.  Collective on the PETSc communicator."""
     PETSc = import_petsc()
     SLEPc = import_slepc()
     comm = mpi_comm(pcomm)
@@ -150,7 +150,10 @@ def inverse_estimate(pcomm, solve_on_host, weights: np.ndarray, *, prefix: str, 
                     "eps_nev": 1, "eps_ncv": 6, "eps_tol": 1e-3, "eps_max_it": 100}
         with OptionsScope(prefix, defaults, options) as scope:
             scope.configure(eps)
-            eps.solve()
+            try:
+                eps.solve()
+            except PETSc.Error:  # on every rank (the solves are collective): no estimate
+                return 0.0
         if eps.getConverged() < 1:
             return 0.0
         theta = eps.getEigenvalue(0).real

@@ -81,10 +81,28 @@ def load(arith: str = "z"):
             entry = getattr(lib, f"{arith}mumps_c")
             entry.argtypes = [C.POINTER(MUMPS_STRUC_C)]
             entry.restype = None
-            found, why = entry, ""
+            version = _version_of(entry)
+            found, why = (entry, "") if version.startswith(VERSIONS) else (
+                None, f"lib{arith}mumps {version!r}: meicp's MUMPS_STRUC_C is that of MUMPS {VERSIONS[0]}x")
             break
         _LIBS[arith] = (found, why)
     return _LIBS[arith]
+
+
+def _version_of(entry) -> str:
+    """The library's version string, from an instance on this process alone (JOB = −1, then
+    −2) whose structure is padded by 64 kB: a MUMPS whose structure is larger than the one
+    above writes into the padding, not past it."""
+    buffer = C.create_string_buffer(C.sizeof(MUMPS_STRUC_C) + 65536)
+    ident = MUMPS_STRUC_C.from_buffer(buffer)
+    ident.sym, ident.par, ident.job, ident.comm_fortran = 0, 1, -1, _self_comm()
+    entry(C.byref(ident))
+    version = ident.version_number.decode(errors="replace").strip("\x00 ")
+    if ident.infog[0] >= 0:
+        ident.icntl[0], ident.icntl[1], ident.icntl[2], ident.icntl[3] = -1, -1, -1, 0  # quiet
+        ident.job = -2
+        entry(C.byref(ident))
+    return version
 
 
 class MumpsError(ProblemError):
@@ -228,8 +246,9 @@ class SchurSeries(_Instance):
 
     def __init__(self, comm, H0: sp.csr_matrix, H1: sp.csr_matrix, rows: np.ndarray, *, defaults: dict | None = None,
                  icntl: dict | None = None, cntl: dict | None = None):
-        # ICNTL(13) = 1: no ScaLAPACK root, whose pivots INFOG(12) would not count
-        super().__init__(comm, "d", 2, {13: 1, 19: 1, **(defaults or {})}, icntl, cntl,
+        # (the Schur block is the root of the elimination tree and is not factored: no ScaLAPACK
+        # root whose pivots INFOG(12) would miss)
+        super().__init__(comm, "d", 2, {19: 1, **(defaults or {})}, icntl, cntl,
                          "Schur complement of the condensation", "-meicp_schur_mat_mumps_")
         H0, H1 = sp.csr_matrix(H0), sp.csr_matrix(H1)
         if H0.shape != H1.shape or not (np.array_equal(H0.indptr, H1.indptr)
@@ -276,7 +295,9 @@ class SchurSeries(_Instance):
         interior's ``(negative, null)`` pivot counts (INFOG(12), INFOG(28)).  ``exact``: this
         factorisation full rank (ICNTL(35) = 0: the series' block low rank is an approximation
         whose inertia proves nothing) and with null pivot detection (ICNTL(24) = 1), for an
-        inertia that is a proof up to rounding.  Collective."""
+        inertia that is a proof up to rounding; its null count then includes the pivots MUMPS
+        forced to ±eps next to the Schur block (INFOG(25)), which a proof cannot accept either.
+        Collective."""
         np.multiply(self._h1, sigma, out=self._a)
         self._a += self._h0
         if diagonal is not None:
@@ -295,12 +316,13 @@ class SchurSeries(_Instance):
         saved = (self.id.icntl[34], self.id.icntl[23])
         if exact:
             self.id.icntl[34], self.id.icntl[23] = 0, 1
+        self.factored = None  # until this factorisation succeeds
         try:
             self._run(2)
         finally:
             self.id.icntl[34], self.id.icntl[23] = saved
         self.factored = (float(sigma), diagonal is not None, exact)
-        null = int(self.id.infog[27]) if exact else 0
+        null = int(self.id.infog[27]) + int(self.id.infog[24]) if exact else 0
         return int(self.id.infog[11]), null
 
     def solve(self, rhs: np.ndarray | None) -> np.ndarray | None:
@@ -309,7 +331,7 @@ class SchurSeries(_Instance):
         or a block of columns, read on the host (the other ranks may pass None); returns the
         solution on the host, None elsewhere.  Collective."""
         if self.factored is None:
-            raise RuntimeError("SchurSeries.solve before any factorisation")
+            raise RuntimeError("SchurSeries.solve without a successful factorisation")
         block = None
         if self.host:
             rhs = np.asarray(rhs, dtype=float)

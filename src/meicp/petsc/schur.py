@@ -145,7 +145,8 @@ def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
     DMUMPS through its C interface: PETSc's interface analyses again at each σ, 0.56 s of 2.2 s
     at 10⁶ DOFs, and its refactorisation returned a wrong Schur complement on 2 ranks); block
     low-rank (:data:`SCHUR_LOW_RANK`) unless ``-meicp_schur_mat_mumps_*`` say otherwise.  Where
-    no DMUMPS of a known version loads, one PETSc factorisation per σ.  The result has
+    no DMUMPS of a known version loads (:func:`~meicp.petsc.mumps_c.load` checks the version),
+    one PETSc factorisation per σ.  The result has
     ``destroy()`` (collective) and is a context manager."""
     if mumps_c.load("d")[0] is None:
         return _SchurByPetsc(comm, H0, H1, rows)
