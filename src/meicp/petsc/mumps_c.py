@@ -17,8 +17,9 @@ The matrix goes in distributed by rows (ICNTL(18) = 3: each rank its own rows, i
 default split); right-hand sides, solutions and Schur complements are centralised on the host
 (rank 0).  :class:`MUMPS_STRUC_C` is the C structure of MUMPS 5.5 (``dmumps_c.h`` and
 ``zmumps_c.h`` lay it out alike: the scalars behind its pointers differ, its reals are double
-in both); each instance checks that the library's version is one it was written for and
-says why not otherwise.  Collective on ``comm`` (an mpi4py communicator or None).
+in both); :func:`load` hands out a library only when its version is one this structure was
+written for (asked of a padded instance on this process) and says why not otherwise, so the
+callers fall back.  Collective on ``comm`` (an mpi4py communicator or None).
 """
 from __future__ import annotations
 
@@ -114,8 +115,8 @@ class MumpsError(ProblemError):
 
 
 class _Instance:
-    """One MUMPS instance: JOB = −1 with ``sym`` (0 unsymmetric, 2 general symmetric), the
-    version checked, the controls set (``defaults`` < ``icntl``/``cntl``, by Fortran number),
+    """One MUMPS instance: JOB = −1 with ``sym`` (0 unsymmetric, 2 general symmetric) on a
+    library whose version :func:`load` checked, the controls set (``defaults`` < ``icntl``/``cntl``, by Fortran number),
     and :meth:`destroy` (JOB = −2, collective).  ``what``/``option``: how errors name it."""
 
     def __init__(self, comm, arith: str, sym: int, defaults: dict, icntl: dict | None, cntl: dict | None,
@@ -137,11 +138,8 @@ class _Instance:
         self.id.sym, self.id.par = sym, 1
         self.id.comm_fortran = comm.py2f() if comm is not None else _self_comm()
         self._run(-1)
-        version = self.id.version_number.decode(errors="replace").strip()
-        if not version.startswith(VERSIONS):
-            self.destroy()
-            raise MumpsError(f"lib{arith}mumps {version!r}: meicp's MUMPS_STRUC_C is that of MUMPS {VERSIONS[0]}x")
-        self.version = version
+        # load() handed out only a library of a known version (_version_of)
+        self.version = self.id.version_number.decode(errors="replace").strip()
         # quiet; AMF (Debian's MUMPS has no METIS); rows distributed
         controls = {1: -1, 2: -1, 3: -1, 4: 0, 7: 2, 18: 3, **defaults, **(icntl or {})}
         for k, v in controls.items():
