@@ -83,7 +83,7 @@ class PencilPieces:
 
     def bordered_parts(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
         """``(𝓗₀, 𝓗₁, rows)`` with 𝓗(σ) = 𝓗₀ + σ𝓗₁ (:meth:`bordered`), for callers that
-        build 𝓗(σ) on one pattern for every σ (:meth:`~.condenser.Condenser.bordered`)."""
+        build 𝓗(σ) on one pattern for every σ (:attr:`~.condenser.Condenser.padded_parts`)."""
         N_J, NM_J = self.N[self.J], self.NM[self.J]
         H0 = sp.bmat([[self.Kt, N_J.T], [N_J, None]], format="csr")
         H1 = sp.bmat([[self.Mt, NM_J.T], [NM_J, None]], format="csr")

@@ -44,7 +44,7 @@ from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative,
 from ..petsc.mat import destroying, mat_from_scipy
 from ..petsc.mumps_c import MumpsError
 from ..petsc.options import SCHUR
-from ..petsc.schur import MumpsFactor, dense_schur, mumps_factor, schur_series
+from ..petsc.schur import MumpsFactor, mumps_factor, schur_series
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
 
 log = logging.getLogger("meicp")
@@ -239,7 +239,8 @@ class Condenser:
             lap("probe")
             return False
         X = series.schur_complement()
-        solve = refined_solve(_InteriorSolve(self.comm, series, F, 0.0), KFF)
+        interior = _InteriorSolve(self.comm, series, F, 0.0)
+        solve = refined_solve(interior, KFF)
         self.relative_error, _ = schur_error(self.comm, pieces, solve, schur=lambda _sigma: X)
         self._schur0 = from_bordered_schur(pieces, 0.0, X, self.relative_error)
         self._solve0 = solve
@@ -247,8 +248,8 @@ class Condenser:
         if need_tau:
             estimate = 0.0
             if diagonal:
-                host = _InteriorSolve(self.comm, series, F, 0.0)
-                estimate = inverse_estimate(to_petsc_comm(self.comm), host.on_host, m, prefix=SCHUR, options=TAU_EPS)
+                estimate = inverse_estimate(to_petsc_comm(self.comm), interior.on_host, m, prefix=SCHUR,
+                                            options=TAU_EPS)
             if not (estimate > 0 and held(0.5 * estimate)) and not held(0.0):
                 lap("held")
                 return False
@@ -297,13 +298,6 @@ class Condenser:
         H0, H1, rows = self.pieces.bordered_parts()
         self.pad_bordered((abs(H0) + abs(H1)).tocsr())  # the union of both patterns, padded
         return self.pad_bordered(H0), self.pad_bordered(H1), rows
-
-    def bordered(self, sigma: float) -> tuple[sp.csr_matrix, np.ndarray]:
-        """The pieces' bordered matrix 𝓗(σ) and its Schur rows, padded to node blocks: 𝓗₀ + σ𝓗₁
-        on one pattern, both padded once (a matrix product and a padding per σ cost 0.5 s at 10⁶
-        DOFs); the same values as ``pieces.bordered(σ)``."""
-        P0, P1, rows = self.padded_parts
-        return sp.csr_matrix((P0.data + sigma * P1.data, P0.indices, P0.indptr), shape=P0.shape), rows
 
     def error_text(self) -> str:
         if self.method == "solves":
@@ -439,18 +433,13 @@ def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
     return ""
 
 
-def schur_error(comm, pieces: PencilPieces, solve_KFF, *, schur=None) -> tuple[float, np.ndarray]:
+def schur_error(comm, pieces: PencilPieces, solve_KFF, *, schur) -> tuple[float, np.ndarray]:
     """MUMPS' Schur complement X of the σ = 0 bordered matrix and its relative error, measured
     along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from
-    ``solve_KFF`` (a separate factor of K̃_FF); charged ×PROBE_SAFETY, at least
-    SCHUR_ERROR_FLOOR.  ``schur``: σ → X, e.g. :meth:`Condenser.schur_at` (default: one
-    :func:`~meicp.petsc.schur.dense_schur` of ``pieces.bordered``).  Returns ``(relative
-    error, X)``."""
-    if schur is None:
-        H, rows = pieces.bordered(0.0)
-        X = dense_schur(comm, H, rows, symmetric=True)
-    else:
-        X = schur(0.0)
+    ``solve_KFF`` (solves with K̃_FF refined against it); charged ×PROBE_SAFETY, at least
+    SCHUR_ERROR_FLOOR.  ``schur``: σ → X, e.g. :meth:`Condenser.schur_at`.  Returns
+    ``(relative error, X)``."""
+    X = schur(0.0)
     G = from_bordered_schur(pieces, 0.0, X, 0.0).G()
     J, F = pieces.J, pieces.F
     rng = np.random.default_rng(14)
