@@ -20,13 +20,14 @@ owns every returned PETSc object and destroys it (collectively) when done.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..core.errors import ProblemError
 from ..lattice.assembly import (as_model, assemble_scipy, chunks, index_dtype, mass_diagonal,
                                 neighbour_exists, stiffness_block)
 from ..lattice.model import SLOTS, LatticeModel
 from . import import_petsc
-from .comm import to_petsc_comm
+from .comm import mpi_comm, to_petsc_comm
 
 
 def assemble(scene, comm=None):
@@ -45,6 +46,78 @@ def assemble(scene, comm=None):
     if comm is None:
         return assemble_scipy(model)
     return assemble_petsc(model, comm)
+
+
+class LatticeMatrices:
+    """K and M of one lattice, assembled once for one analysis and owned by it.
+
+    ``LatticeMatrices(model, comm)``: SciPy CSR when ``comm`` is serial (None or one rank),
+    PETSc AIJ on ``comm``'s row bands otherwise (:func:`assemble`; collective).  Every step of
+    the analysis reads these (the static equilibrium, each contact state's pencil, the
+    condensation, the friction range, flutter), so the lattice is assembled once per run.
+    :meth:`whole` gives SciPy K, M on every rank to the consumers that need them whole;
+    :meth:`destroy` (or leaving a ``with`` block) frees the PETSc matrices, collectively."""
+
+    def __init__(self, model: LatticeModel, comm=None):
+        self.model = model
+        self.comm = mpi_comm(comm)
+        self.K, self.M = assemble(model, self.comm)
+
+    @classmethod
+    def wrapping(cls, model: LatticeModel, K, M, comm=None) -> "LatticeMatrices":
+        """K and M the caller assembled already (e.g. a benchmark that times the assembly on
+        its own; SciPy, or PETSc on ``comm``), destroyed by :meth:`destroy` or by the caller."""
+        obj = cls.__new__(cls)
+        obj.model, obj.comm, obj.K, obj.M = model, mpi_comm(comm), K, M
+        return obj
+
+    @property
+    def distributed(self) -> bool:
+        return self.comm is not None
+
+    def whole(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """``(K, M)`` as SciPy CSR on every rank: the matrices themselves when serial; when
+        distributed, each rank's rows gathered (collective) — the same arrays the serial
+        assembly gives, without assembling again.  Not kept: the caller drops them when done
+        (at 10⁶ DOFs they are 225 MB on every rank)."""
+        if not self.distributed:
+            return self.K, self.M
+        return gathered_rows(self.K), gathered_rows(self.M)
+
+    def destroy(self) -> None:
+        """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
+        if self.distributed:
+            for A in (self.K, self.M):
+                if A is not None:
+                    A.destroy()
+        self.K = self.M = None
+
+    def __enter__(self) -> "LatticeMatrices":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+
+def gathered_rows(A) -> sp.csr_matrix:
+    """A PETSc AIJ matrix distributed by contiguous rows as SciPy CSR on every rank, its rows
+    stacked in order (collective): CSR arrays straight from each rank's own, no re-sorting."""
+    indptr, indices, data = A.getValuesCSR()
+    comm = mpi_comm(A.getComm())
+    counts = np.array(comm.allgather(int(indices.size)), dtype=np.int64)
+    rows = np.array(comm.allgather(int(indptr.size - 1)), dtype=np.int64)
+    n_rows, n_cols = A.getSize()
+    all_indices = np.empty(int(counts.sum()), dtype=indices.dtype)
+    all_data = np.empty(int(counts.sum()), dtype=data.dtype)
+    comm.Allgatherv(indices, [all_indices, counts])
+    comm.Allgatherv(data, [all_data, counts])
+    lengths = np.empty(n_rows, dtype=indptr.dtype)
+    comm.Allgatherv(np.diff(indptr), [lengths, rows])
+    all_indptr = np.zeros(n_rows + 1, dtype=indptr.dtype)
+    np.cumsum(lengths, out=all_indptr[1:])
+    out = sp.csr_matrix((all_data, all_indices, all_indptr), shape=(n_rows, n_cols), copy=False)
+    out.has_sorted_indices = True
+    return out
 
 
 def row_band(model: LatticeModel, comm) -> tuple[int, int]:
