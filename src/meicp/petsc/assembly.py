@@ -79,7 +79,7 @@ class LatticeMatrices:
         """``(K, M)`` as SciPy CSR on every rank: the matrices themselves when serial; when
         distributed, each rank's rows gathered (collective) — the same arrays the serial
         assembly gives, without assembling again.  Not kept: the caller drops them when done
-        (at 10⁶ DOFs they are 225 MB on every rank)."""
+        (they are the whole lattice's on every rank: docs/benchmarks-notes-data.md)."""
         if not self.distributed:
             return self.K, self.M
         return gathered_rows(self.K), gathered_rows(self.M)

@@ -27,9 +27,9 @@ from .result import EXACT_WIDTH, CriticalFriction
 log = logging.getLogger("meicp")
 
 #: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
-#: complementarity DOFs (order ≤ |J|) up to this many pairs, where the enumeration's time
-#: (about ×2.2 per pair: docs/benchmarks-notes-data.md) is still that of a bracket; beyond it
-#: brackets μ_c (:mod:`.bracket`)
+#: complementarity DOFs (order ≤ |J|) up to this many pairs: the enumeration's time grows
+#: geometrically with |J| (docs/benchmarks-notes-data.md); beyond it brackets μ_c
+#: (:mod:`.bracket`)
 CRITICAL_J = 20
 
 
