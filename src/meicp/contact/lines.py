@@ -36,10 +36,11 @@ class ContactState(str, Enum):
     @property
     def slip_sign(self) -> int:
         """+1 for slip+, −1 for slip−, 0 otherwise."""
-        return {ContactState.SLIP_PLUS: 1, ContactState.SLIP_MINUS: -1}.get(self, 0)
+        return _SLIP_SIGN.get(self, 0)
 
 
 assert tuple(s.value for s in ContactState) == STATES  # the scene's vocabulary, in its order
+_SLIP_SIGN = {ContactState.SLIP_PLUS: 1, ContactState.SLIP_MINUS: -1}
 
 
 @dataclass(frozen=True)

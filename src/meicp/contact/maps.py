@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -64,9 +65,9 @@ class ReducedSystem:
     pair_of: list = field(default_factory=list)
     grazing_case: tuple = ()
 
-    @property
+    @cached_property
     def P(self) -> sp.csr_matrix:
-        """P̃ with each contact line's own μ."""
+        """P̃ with each contact line's own μ (formed once per reduced system)."""
         return self.rows_at()
 
     def friction_rows(self, mu=None) -> sp.csr_matrix:

@@ -20,7 +20,7 @@ from ...core.errors import ProblemError
 from ...lattice.model import LatticeModel
 from ...petsc.assembly import assemble
 from ...scene import Scene
-from ..lines import BASE, contact_lines
+from ..lines import contact_lines
 
 #: rank tolerance (relative) of the rigid-mode and contact-restraint tests
 RANK_RTOL = 1e-9
