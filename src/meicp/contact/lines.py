@@ -49,13 +49,15 @@ class ContactLine:
     contact node, or the upper node whose DOFs become the relative displacement
     ``d = u_upper − u_lower``); ``lower``: the lower side's node (None for the base);
     ``friction``: μ; ``states``: one :class:`ContactState` per contact, left to right, or None
-    while unresolved (the scene says ``"solve"``)."""
+    while unresolved (the scene says ``"solve"``); ``key``: the scene key of its states, which
+    messages name."""
 
     name: str
     upper: np.ndarray
     lower: np.ndarray | None
     friction: float
     states: tuple | None = None
+    key: str = "states"
 
     @property
     def size(self) -> int:
@@ -63,7 +65,7 @@ class ContactLine:
 
     def in_states(self, states) -> "ContactLine":
         """This line with its states replaced (parsed: strings or :class:`ContactState`)."""
-        return dataclasses.replace(self, states=parse_states(states, self.size, f"{self.name} states"))
+        return dataclasses.replace(self, states=parse_states(states, self.size, self.key))
 
 
 def contact_lines(scene, model) -> tuple[ContactLine, ...]:
@@ -73,14 +75,16 @@ def contact_lines(scene, model) -> tuple[ContactLine, ...]:
     lines = []
     if model.boundary.bottom == "contact":
         nodes = model.contact_nodes()
+        key = "contact.states"
         lines.append(ContactLine(BASE, nodes, None, float(scene.contact.friction),
-                                 _prescribed(scene.contact.states, nodes.size, "contact.states")))
+                                 _prescribed(scene.contact.states, nodes.size, key), key))
     for k, itf in enumerate(scene.interfaces):
         if itf.kind != "frictional":
             continue
         lower, upper = model.interface_node_pairs(itf.index)
+        key = f"interfaces[{k}].states"
         lines.append(ContactLine(itf.below, upper, lower, float(itf.friction),
-                                 _prescribed(itf.states, upper.size, f"interfaces[{k}].states")))
+                                 _prescribed(itf.states, upper.size, key), key))
     return tuple(lines)
 
 
@@ -92,8 +96,7 @@ def with_states(lines, override: dict | None) -> tuple[ContactLine, ...]:
     out = tuple(line.in_states(override[line.name]) if line.name in override else line for line in lines)
     for line in out:
         if line.states is None:
-            key = "contact.states" if line.name == BASE else f"interface {line.name!r} states"
-            raise ProblemError(f"{key} = \"solve\" needs the static equilibrium first")
+            raise ProblemError(f"{line.key} = \"solve\" needs the static equilibrium first")
     return out
 
 
