@@ -3,7 +3,9 @@
 for the instability analysis, the critical friction, tests and benchmark scripts alike.
 
 States come from the scene (prescribed), from the static frictional equilibrium when a
-contact set says ``"solve"`` (:func:`contact_states`), or from the caller.
+contact line says ``"solve"`` (:func:`contact_states`), or from the caller.  The lattice's K
+and M are assembled once per analysis (:class:`~meicp.petsc.assembly.LatticeMatrices`) and every
+pencil reduced from them keeps them (``Pencil.lattice``), with the communicator.
 """
 
 from __future__ import annotations
