@@ -23,7 +23,7 @@ from meicp.io import scene as scene_io
 from meicp.io.scene import load_scene, loads_scene
 from meicp.lattice.size import check_size, estimate_size
 from meicp.petsc.comm import index_max
-from meicp.petsc.inertia import pencil_is_negative
+from meicp.contact.rayleigh import pencil_is_negative
 from meicp.petsc.mat import mat_from_scipy
 
 from .conftest import ROOT, meicp_cmd, run
