@@ -4,13 +4,13 @@ tests"):
 
     T1  σ = 0      G(0) ∈ R₀: a positive diagonal D with sym(DG(0)) ≻ 0 (one condensation)
     T2  windows    G(σ) ∈ R₀ for every σ in [0, σ_max], by certificates on windows
-                   [σ_a, σ_b] from condensations at their ends (:mod:`.windows`)
+                   [σ_a, σ_b] from condensations at their ends (:mod:`.windows`, :mod:`.cover`)
 
-(G(σ) of :mod:`.condensation`; the certificates of :mod:`meicp.lcp.certificates`.)  Every
+(G(σ) of :mod:`meicp.contact.condensation`; the certificates of :mod:`meicp.lcp.certificates`.)  Every
 certificate is decided with its rounding margin (the dense eigen-solve's and the
 condensation's error) and a caller's relative ``tol``: a borderline case is not proved.
 
-The condensations are those of :class:`.condenser.Condenser` (MUMPS: solves with a bounded
+The condensations are those of :class:`meicp.contact.condenser.Condenser` (MUMPS: solves with a bounded
 error, or Schur complements with a measured one).  Collective on ``comm``; the dense
 certificates run on rank 0, the other ranks serve its condensations.
 """
@@ -21,14 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..lcp.certificates import optimise_scaling, pd_certificate
-from ..petsc.comm import mpi_comm
-from .condenser import Condenser, on_root
-from .windows import cover
+from ...lcp.certificates import optimise_scaling, pd_certificate
+from ...petsc.comm import mpi_comm
+from ..condenser import Condenser, on_root
+from .cover import Cover, cover
 
 
 @dataclass(frozen=True)
-class DivergenceProof:
+class CondensedProof:
     """What :func:`prove_no_divergence` established.
 
     proved: True only if no MEiCP solution has σ in ``window`` (the whole asked window);
@@ -50,7 +50,7 @@ class DivergenceProof:
 
 
 def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, method: str = "auto",
-                        max_samples: int = 16) -> DivergenceProof:
+                        max_samples: int = 16) -> CondensedProof:
     """Prove that the MEiCP of ``pencil`` has no solution with σ in [0, σ_max].
 
     comm: the communicator (None: serial); collective.  pencil: a
@@ -60,7 +60,7 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     an inertia of sym(σ_max B − A)); 0 asks for σ = 0 only; ``inf`` is allowed (the last
     window is [σ_a, ∞)).  tol: relative margin every certificate must clear on top of its
     rounding allowance.  method: ``"schur"``, ``"solves"`` or ``"auto"``
-    (:mod:`.condenser`).  max_samples: condensations allowed for the windows.
+    (:mod:`meicp.contact.condenser`).  max_samples: condensations allowed for the windows.
 
     Contract: ``proved=True`` is a proof (every certificate re-checked with its margin; with
     the Schur method the condensation error is measured, as the statement says);
@@ -74,18 +74,18 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     if not (sigma_max >= 0):
         raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
     if np.asarray(pencil.J).size == 0:
-        return DivergenceProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
+        return CondensedProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
     with Condenser(comm, pencil.model, pencil.maps, method=method) as cond:
         return _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start)
 
 
-def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> DivergenceProof:
+def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedProof:
     if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
-        return DivergenceProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
+        return CondensedProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
                                "mass); this pencil couples contact and free DOFs through its mass (a frictional "
                                "interface): only σ = 0 can be certified, the window is undecided", np.nan, 0, ())
     if not cond.prepare(need_tau=sigma_max > 0):
-        return DivergenceProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
+        return CondensedProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()
     if comm is None or comm.Get_size() == 1:
         out = on_root(comm, lambda: _decide(cond.at, cond.sharper_tau, sigma_max, cond.tau, tol, max_samples,
@@ -113,7 +113,7 @@ def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> Divergence
         out = on_root(comm, decide)
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
     proved, test, statement, margin, samples, window = out
-    return DivergenceProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
+    return CondensedProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
 
 
 #: the request, served like a σ, that certifies the λ_min estimate as τ (:meth:`Condenser.sharper_tau`)
@@ -136,8 +136,8 @@ def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=No
     if sigma_max == 0:
         return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
                 f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
-    cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale,
-                sharper_tau=sharper_tau, scalings={0.0: d})
+    settings = Cover(1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale)
+    cov = cover(condense_at, settings, sharper_tau=sharper_tau, scalings={0.0: d})
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])
