@@ -49,8 +49,8 @@ from .result import FlutterMode, growth_frequency
 
 log = logging.getLogger("meicp")
 
-#: dense QZ up to this many retained DOFs (about 60 s at 2,000 and 7 min at 3,500 on one
-#: loaded core: docs/benchmarks.md, Flutter)
+#: dense QZ up to this many retained DOFs: its time grows as n³, to minutes past this
+#: (docs/benchmarks-notes.md, "DENSE_MAX")
 DENSE_MAX = 2500
 #: a flutter mode's backward error must be at most this to be reported
 RESIDUAL_TOL = 1e-10
@@ -72,27 +72,28 @@ PROXY_NX = 32
 PROXY_ROWS = 8
 PROXY_LOCALISED = 0.6
 PROXY_NEAR_ROWS = 3
-#: memory the search adds per retained DOF, all ranks together (the factor of the 2n real form:
-#: measured 7.9 kB at 10⁵ DOFs on 2 ranks, rounded up); it is skipped when that is not available
+#: memory the search adds per retained DOF, all ranks together (the factor of the 2n real form,
+#: measured and rounded up: docs/benchmarks-notes.md, "SEARCH_BYTES_PER_DOF"); it is skipped when
+#: that is not available
 SEARCH_BYTES_PER_DOF = 10_000
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
 #: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
-#: flutter eigenvalues (shift-and-invert then returns pseudo-pairs next to it: 3·10⁵ DOFs,
-#: |σ − τ| ≤ 1e-4, backward errors 1e-10 … 1e-6); it is moved up off the cluster by
-#: OFF_CLUSTER·max(Im τ, 0.05|τ|) per try, at most OFF_CLUSTER_TRIES times (there: +0.05i
-#: still inside, +0.155i certified the cluster's top edge, backward error 2e-14)
+#: flutter eigenvalues (shift-and-invert then returns pseudo-pairs next to it); it is moved up
+#: off the cluster by OFF_CLUSTER·max(Im τ, 0.05|τ|) per try, at most OFF_CLUSTER_TRIES times:
+#: one such move certified the cluster's top edge where it was measured
+#: (docs/benchmarks-notes.md, "OFF_CLUSTER")
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
 #: from this many retained DOFs the search *starts* off the cluster (at off_cluster(τ, 0)), with a
-#: Krylov basis of 16 (32 on the 2n form): the proxy's σ lay inside the cluster at 3·10⁵ and
-#: 10⁶ DOFs, not at 10⁵ (backward errors 1.7e-11 there); above the cluster a basis of 12
-#: converged in 16 restarts at 3·10⁵, one of 16 in one or two (docs/benchmarks.md, Flutter)
+#: Krylov basis of 16 (32 on the 2n form): past it the proxy's σ lay inside the cluster, and
+#: above the cluster a basis of 16 converges in far fewer restarts than one of 12
+#: (docs/benchmarks-notes.md, "OFF_CLUSTER_FROM")
 OFF_CLUSTER_FROM = 200_000
 OFF_CLUSTER_NCV = 16
 #: from SEARCH_LARGE retained DOFs the shifted pencil is factored block-low-rank at this
-#: dropping tolerance (MUMPS CNTL(7)): the 2n real form 2.2× faster at 10⁶ DOFs, certified
-#: pairs' backward errors 4e-13 as without it (docs/benchmarks.md, Flutter)
+#: dropping tolerance (MUMPS CNTL(7)): faster, with the certified pairs' backward errors as
+#: without it (docs/benchmarks-notes.md, "LOW_RANK_TOL")
 LOW_RANK_TOL = 1e-10
 
 

@@ -118,7 +118,7 @@ def nonnegative_count(A, eta: float) -> int:
 
 def _row_maxima(indptr: np.ndarray, data: np.ndarray) -> np.ndarray:
     """The largest |entry| of each CSR row (0 for an empty row), by one ``reduceat``
-    (``np.maximum.at`` took 0.3 s per call at 10⁶ rows)."""
+    (``np.maximum.at`` is far slower at 10⁶ rows: docs/benchmarks-notes.md, "row maxima")."""
     counts = np.diff(indptr)
     out = np.zeros(counts.size)
     nonempty = counts > 0

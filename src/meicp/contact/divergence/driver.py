@@ -13,6 +13,10 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
 5. **Whole search** with its whole budget.
 6. Otherwise **undecided**, saying what was proved, with the friction up to which these
    contact states are proved free of divergence.
+
+Why a short search before the proof and the whole one after: a mode on the full support, or
+one support update away, is found at once, while on a stable lattice a long search finds
+nothing and costs more than the proof (docs/benchmarks-notes.md, "search before proof").
 """
 
 from __future__ import annotations

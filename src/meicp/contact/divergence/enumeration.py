@@ -41,7 +41,7 @@ def check_enumeration_size(n_j: int, r: int, options: dict) -> None:
     given = options.get("max_j")
     limit = ENUMERATE_J if given is None else as_int(given, "max_j", minimum=0, maximum=MAX_ENUMERATED)
     if n_j <= limit:
-        if given is None:  # the pair count is not the work: 16 pairs on 2,000 DOFs are days
+        if given is None:  # the pair count is not the work (docs/benchmarks-notes.md, "enumeration by name")
             check_enumeration_work(n_j, r, f"analyze(..., max_j={max(n_j, 1)}) from Python")
         return
     name = (f"max_j = {limit}" if given is not None

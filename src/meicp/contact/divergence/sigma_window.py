@@ -70,7 +70,13 @@ class TopEstimate:
 
 
 def probe_top(A, B, estimate=ritz_estimate) -> TopEstimate:
-    """Whether sym(B) ≻ 0, and the short Lanczos run (PROBE_RESTARTS) on (sym A, sym B)."""
+    """Whether sym(B) ≻ 0, and the short Lanczos run (PROBE_RESTARTS) on (sym A, sym B).
+
+    First, because a Ritz value θ > 0 spares the Rayleigh bound at 0 (one LDLᵀ of the whole
+    pencil) that could then prove nothing; short, because where sym(A) ≺ 0 the top sits among
+    the slow vibrations just below 0 and a full run stalls for its whole budget before the bound
+    proves stability anyway (docs/benchmarks-notes.md, "short Lanczos run").  Its options:
+    -meicp_window_* on the command line."""
     b_definite, _ = symmetric_part_definite(B)
     theta, converged = estimate(A, B, max_it=PROBE_RESTARTS)[:2] if b_definite else (math.nan, False)
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
