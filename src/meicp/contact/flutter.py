@@ -471,5 +471,6 @@ def not_analysed(reason: str) -> FlutterVerdict:
     return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
 
 
-__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair", "analyze_flutter", "dense_flutter",
-           "grazing_branches", "lambda_line_targets", "pencil_flutter", "proxy_targets", "search_flutter"]
+__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
+           "analyze_flutter", "dense_flutter", "grazing_branches", "lambda_line_targets", "pencil_flutter",
+           "proxy_targets", "search_flutter"]
