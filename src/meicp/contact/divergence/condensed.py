@@ -17,7 +17,7 @@ certificates run on rank 0, the other ranks serve its condensations.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -112,8 +112,7 @@ def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedP
                     continue
         out = on_root(comm, decide)
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
-    proved, test, statement, margin, samples, window = out
-    return CondensedProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
+    return replace(out, statement=f"{out.statement}; {cond.error_text()}", seconds=secs)
 
 
 #: the request, served like a σ, that certifies the λ_min estimate as τ (:meth:`Condenser.sharper_tau`)
@@ -124,30 +123,32 @@ def _serve(cond: Condenser, request):
     return cond.sharper_tau() if request == SHARPER_TAU else cond.at(request)
 
 
-def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=None):
-    """T1 then T2 on rank 0: ``(proved, test, statement, margin, samples, window)``."""
+def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=None) -> CondensedProof:
+    """T1 then T2 on rank 0 (the statement without the condensation's error, no seconds)."""
     c0 = condense_at(0.0)
     G0 = c0.G()
     d, _ = optimise_scaling([G0], iters=40)
     cert = pd_certificate(G0, c0.error(), d, tol=tol)
     if not cert.proved:
-        return (False, "", f"σ = 0 not excluded: no diagonal scaling D found with sym(DG(0)) ≻ 0 beyond rounding "
-                f"(margin {cert.margin:.2e})", cert.margin, 1, ())
+        return CondensedProof(False, "", f"σ = 0 not excluded: no diagonal scaling D found with sym(DG(0)) ≻ 0 "
+                              f"beyond rounding (margin {cert.margin:.2e})", cert.margin, 1, ())
     if sigma_max == 0:
-        return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
-                f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
+        return CondensedProof(True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
+                              f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1,
+                              (0.0, 0.0))
     settings = Cover(1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale)
     cov = cover(condense_at, settings, sharper_tau=sharper_tau, scalings={0.0: d})
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])
         split = f", split at the scale {scale:.3g}" if scale and scale > cov.tau else ""
-        return (True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] ({len(cov.windows)} "
-                f"windows, {n} condensations, τ = {cov.tau:.3g} certified{split})", margin, n, (0.0, float(sigma_max)))
+        return CondensedProof(True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] "
+                              f"({len(cov.windows)} windows, {n} condensations, τ = {cov.tau:.3g} certified{split})",
+                              margin, n, (0.0, float(sigma_max)))
     covered = 0.0
     for a, b, *_ in sorted(cov.windows):
         if a <= covered:
             covered = max(covered, b)
     a, b, m = cov.failed
-    return (False, "", f"window [{a:.6g}, {b:.6g}] not certified (margin {m:.2e}) after {n} condensations; "
-            f"proved free of modes: [0, {covered:.6g}]", m, n, (0.0, float(covered)))
+    return CondensedProof(False, "", f"window [{a:.6g}, {b:.6g}] not certified (margin {m:.2e}) after {n} "
+                          f"condensations; proved free of modes: [0, {covered:.6g}]", m, n, (0.0, float(covered)))

@@ -57,7 +57,7 @@ class Cover:
         return max(self.tau, self.scale) if self.scale else self.tau
 
 
-@dataclass
+@dataclass(frozen=True)
 class Coverage:
     """What :func:`cover` proved: ``proved`` on all of [0, σ_max]; ``windows`` (σ_a, σ_b,
     margin, (kind, β)) certified; ``samples`` the σ values condensed; ``failed`` (σ_a, σ_b,
@@ -65,11 +65,11 @@ class Coverage:
     used last."""
 
     proved: bool
-    windows: list = field(default_factory=list)
-    samples: list = field(default_factory=list)
-    failed: tuple | None = None
-    seconds: float = 0.0
-    tau: float = 0.0
+    windows: list
+    samples: list
+    failed: tuple | None
+    seconds: float
+    tau: float
 
 
 class Samples:
@@ -203,7 +203,7 @@ def cover(condense_at, settings: Cover, *, sharper_tau=None, scalings: dict | No
     t0 = time.perf_counter()
     samples = Samples(condense_at, settings, scalings)
     tau, s_split = settings.tau, settings.split_scale
-    out = Coverage(False)
+    windows, failed = [], None
     pending = first_windows(settings)
     while pending:
         a, b = pending.pop(0)
@@ -212,15 +212,10 @@ def cover(condense_at, settings: Cover, *, sharper_tau=None, scalings: dict | No
             tau, sharper_tau = max(tau, sharper_tau()), None
         window = certify_window(samples, a, b, tau)
         if window.proved:
-            out.windows.append((a, b, window.margin, window.how))
+            windows.append((a, b, window.margin, window.how))
         elif window.halves:
             pending[:0] = window.halves
         else:
-            out.failed = (a, b, window.margin)
+            failed = (a, b, window.margin)
             break
-    else:
-        out.proved = True
-    out.samples = sorted(samples.condensed)
-    out.seconds = time.perf_counter() - t0
-    out.tau = tau
-    return out
+    return Coverage(failed is None, windows, sorted(samples.condensed), failed, time.perf_counter() - t0, tau)
