@@ -5,9 +5,8 @@ Mixed eigenvalue complementarity problems (MEiCP) and linear complementarity pro
 the README for the public API.
 """
 
-__version__ = "0.1.0"
-
-from .core.environment import require_python_stack  # noqa: E402
+from ._version import __version__
+from .core.environment import require_python_stack
 
 require_python_stack()  # NumPy, SciPy, mpi4py from Debian: a clear message if not
 

@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..core.cleanup import on_interrupt
 from ..core.errors import ProblemError
 from ..lattice.assembly import as_model
