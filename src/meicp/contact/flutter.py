@@ -38,9 +38,9 @@ import numpy as np
 import scipy.linalg as sl
 import scipy.sparse as sp
 
+from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..lattice.assembly import assemble_scipy
 from ..lattice.model import LatticeModel
-from ..petsc.comm import available_memory_on, comm_size, mpi_comm
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import is_petsc_mat, mat_from_scipy, to_dense
 from .maps import contact_sets, reduced_system

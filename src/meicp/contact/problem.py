@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
-from ..petsc.comm import mpi_comm
 from ..petsc.mat import destroying, is_petsc_mat
 from ..petsc.pencil import reduced_pencil
 from ..scene import SOLVE, Scene

@@ -18,9 +18,9 @@ import time
 
 import numpy as np
 
+from ..core.comm import comm_size
 from ..core.errors import ProblemError
 from ..petsc import import_petsc
-from ..petsc.comm import comm_size
 from ..petsc.eicp_vi import snes_vi_eicp
 from ..petsc.mat import mat_to_scipy
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair

@@ -18,9 +18,9 @@ import time
 
 import numpy as np
 
+from ..core.comm import mpi_comm
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.validation import is_symmetric
-from ..petsc.comm import mpi_comm
 from ..petsc.options import PetscOptionError
 from .active_set import active_set
 from .budget import check_enumeration_work

@@ -27,8 +27,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from . import import_petsc, import_slepc, mumps_c
-from .comm import mpi_comm
 from .mat import mat_from_local_csr, vec_to_numpy
 from .options import FLUTTER, OptionsScope, mumps_controls
 

@@ -16,8 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core import validation
+from ..core.comm import mpi_comm
 from . import import_petsc
-from .comm import mpi_comm, to_petsc_comm
+from .comm import to_petsc_comm
 
 
 def ownership(n: int, rank: int, size: int) -> tuple[int, int]:

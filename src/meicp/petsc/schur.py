@@ -23,8 +23,9 @@ import ctypes
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from . import import_petsc, mumps_c
-from .comm import mpi_comm, to_petsc_comm
+from .comm import to_petsc_comm
 from .mat import mat_from_local_csr, ownership
 from .options import SCHUR, OptionsScope, mumps_controls
 
