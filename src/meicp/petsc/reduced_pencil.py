@@ -22,7 +22,7 @@ import numpy as np
 
 from . import import_petsc, import_slepc
 from .mat import vec_to_numpy
-from .options import ACTIVE_SET, OptionsScope, report_unused
+from .options import ACTIVE_SET, OptionsScope, petsc_errors, report_unused
 
 
 class ReducedPencilSolver:
@@ -81,13 +81,15 @@ class ReducedPencilSolver:
         self.give_up = give_up
         self.gave_up = 0
 
+    @petsc_errors("a SLEPc eigen-solve of the reduced pencil")
     def solve(self, removed: np.ndarray, initial: np.ndarray | None = None, *,
               target: float | None = None, nev: int | None = None):
         """Converged real eigenpairs ``[(λ, ξ, relative_residual)]`` of the pencil without
         the ``removed`` DOFs (global indices, same on every rank), nearest the target first.
         ``target``/``nev`` override the configured ones for this solve (e.g. to follow one
         eigenpair with a shift at its previous eigenvalue).  ξ is a NumPy array on every
-        rank.  Collective."""
+        rank.  A PETSc or SLEPc error is raised as :class:`~meicp.core.errors.PetscSolveError`.
+        Collective."""
         PETSc = import_petsc()
         SLEPc = import_slepc()
         same = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
