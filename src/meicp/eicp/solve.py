@@ -31,7 +31,8 @@ from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
 
-#: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
+#: auto enumerates when |J| and n are at most these (2^16 supports; what they cost:
+#: docs/benchmarks-notes-layering.md)
 AUTO_ENUMERATE_J = 16
 AUTO_ENUMERATE_N = 400
 #: auto tries rayleigh up to this n: SPG needs only products, but from 8 starts of up to

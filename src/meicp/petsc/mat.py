@@ -1,7 +1,7 @@
 """PETSc Mats: built from per-rank CSR rows, gathered back, and registered as a matrix kind.
 
 Distributed matrices are built from per-rank CSR rows: each rank's rows with NumPy/SciPy
-handed to ``createAIJ(csr=...)`` (docs/design.md §11: a Python ``setValues`` loop is 40× slower),
+handed to ``createAIJ(csr=...)`` (a Python ``setValues`` loop is far slower: docs/design.md §11),
 and gathered back into SciPy.  Importing this module registers the PETSc Mat's
 implementations of the operations of :mod:`meicp.core.matrix` (``matvec``, ``to_dense``,
 ``max_abs_entry``...), through :class:`PetscMat`, which recognises petsc4py's ``Mat`` by
