@@ -34,7 +34,7 @@ import os
 import time
 from pathlib import Path
 
-from ..info import __version__
+from .._version import __version__
 from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
 from ..contact.modal import has_contact

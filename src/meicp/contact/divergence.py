@@ -44,14 +44,13 @@ import time
 
 import numpy as np
 
-from ..core.errors import ProblemError
+from ..core.errors import PetscOptionError, ProblemError
+from ..core.matrix import max_abs_entry
 from ..core.validation import as_int
 from ..eicp.budget import check_enumeration_work
 from ..eicp.problem import MAX_ENUMERATED, lam_floor
 from ..eicp.solve import solve_eicp
 from ..petsc.inertia import rayleigh_bound, symmetric_part_definite
-from ..petsc.mat import max_abs_entry
-from ..petsc.options import PetscOptionError
 from ..petsc.window import rayleigh_estimate
 from ..scene import Scene
 from .divergence_proof import prove_no_divergence

@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
+from ..core.matrix import is_petsc_mat
 from ..core.validation import is_symmetric
 from . import import_petsc
-from .comm import mpi_comm
-from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
+from .mat import mat_from_scipy, symmetric_part
 from .options import INERTIA, OptionsScope
 
 PREFIX = INERTIA
