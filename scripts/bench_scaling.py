@@ -88,13 +88,13 @@ import scipy.sparse.linalg as spla
 
 import bench_eicp
 import meicp
-from bench_common import (MUMPS_ORDER_NAME, Stage, csv_path, release_memory, rss_bytes, slepc_eigensolve,
-                          write_rows)
-from bench_scenes import lattice_shape, two_layer_scene
+from bench_common import (MUMPS_ORDER_NAME, Stage, csv_path, lattice_shape, release_memory, rss_bytes,
+                          slepc_eigensolve, write_rows)
 from meicp.contact import pencil
 from meicp.contact.maps import contact_sets
 from meicp.contact.problem import pencil_of
 from meicp.contact.static import static_equilibrium
+from meicp.examples import two_layer_scene
 from meicp.lattice.model import LatticeModel
 from meicp.lcp.siconos import siconos_solve
 from meicp.petsc import import_slepc
