@@ -274,10 +274,9 @@ def test_condensed_critical_friction_beyond_the_former_limit():
     mu = critical_friction(sc)
     assert 1.0 < mu < 3.0
     # the smallest certified σ = 0 solution: just above it analyze finds a mode
-    import dataclasses
+    from meicp.examples import with_friction
 
-    above = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, friction=mu * (1 + 1e-4)))
-    below = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, friction=mu * (1 - 1e-4)))
+    above, below = with_friction(sc, mu * (1 + 1e-4)), with_friction(sc, mu * (1 - 1e-4))
     assert analyze(above, method="active-set").stable is False
     assert analyze(below, method="active-set").divergence is not True
 
