@@ -29,7 +29,8 @@ from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
 from .semismooth import semismooth
 
-#: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
+#: auto enumerates up to this |J| when the pencil is this small: seconds at most
+#: (docs/benchmarks-notes-house.md, eicp)
 AUTO_ENUMERATE_J = 16
 AUTO_ENUMERATE_N = 400
 #: auto tries rayleigh up to this n: SPG needs only products, but from 8 starts of up to
