@@ -43,6 +43,12 @@ def csv_path(name: str) -> Path:
     return out_dir() / f"{name}.csv"
 
 
+def read_rows(path) -> list[dict]:
+    """The rows of a benchmark CSV, as dicts of strings."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
 def write_rows(path, rows: list, fields: list, keep=lambda row: True) -> None:
     """Write ``rows`` after the existing rows for which ``keep(row)`` is true."""
     path = Path(path)
