@@ -1,7 +1,6 @@
 """The divergence verdict past the enumeration budget (issue 14, :mod:`meicp.contact.divergence`):
 the issue's table rows decided, and the large-problem path never contradicting enumeration."""
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,10 +10,9 @@ from hypothesis import strategies as st
 
 import meicp
 from meicp.contact import divergence
+from meicp.examples import two_layer_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
 
 
 def _scene(nx, rows, state, mu, shear=0.5):

@@ -38,6 +38,7 @@ MAY_IMPORT = {
     "cli": {"_version", "core", "scene", "lattice", "petsc", "lcp", "eicp", "contact", "plotting", "info", "io"},
     "meicp": {"_version", "core", "scene", "lattice", "lcp", "eicp", "petsc", "contact", "io", "api"},
     "__main__": {"cli"},
+    "examples": {"core", "scene", "lattice", "petsc", "contact", "io", "api"},
 }
 #: names that mean PETSc or SLEPc in code: the bindings, their modules, and the loaders
 #: that import them (comments, docstrings and other strings are prose or data, not use)
@@ -173,3 +174,15 @@ def test_imports_go_one_way_between_rooms(room):
 
 def test_every_module_is_in_a_room():
     assert {_room(name) for name in MODULES} <= set(MAY_IMPORT)
+
+
+def test_no_test_imports_from_scripts():
+    """Tests import what they use as users do (the scene builder is :mod:`meicp.examples`);
+    scripts/ is run, never imported: no ``sys.path`` pointing into it."""
+    tests = ROOT / "tests"
+    found = [f"{path.relative_to(ROOT)}:{node.lineno}"
+             for path in sorted(tests.rglob("*.py"))
+             for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+             and ast.unparse(node.func.value) == "sys.path" and "scripts" in ast.unparse(node)]
+    assert not found, found

@@ -183,11 +183,6 @@ def format_rows(rows) -> str:
     return "\n".join(f"{k:<{width}}  {v}".rstrip() for k, v in rows)
 
 
-def summary_text(scene, result, *, ranks: int = 1) -> str:
-    """The table ``meicp solve`` prints at the end (also usable from Python)."""
-    return format_rows(summary_rows(scene, result, ranks=ranks))
-
-
 def run(args) -> int:
     from mpi4py import MPI
 
