@@ -5,7 +5,7 @@ at scale against one SLEPc eigen-solve of the same pencil, with an independent c
     mpirun -n 2 .venv/bin/python scripts/bench_flutter.py cost [--dofs 100000] [--repeats 3] [--check]
     .venv/bin/python scripts/bench_flutter.py chart     # flutter_accuracy.png, flutter_cost.png
 
-Scenes: ``bench_scenes.two_layer_scene`` (nx = 2ny, soft k = 1 under stiff k = 5, top fixed,
+Scenes: ``meicp.examples.two_layer_scene`` (nx = 2ny, soft k = 1 under stiff k = 5, top fixed,
 sides free, every base node slip+), μ = 2.
 
 ``accuracy`` (serial): the fastest flutter mode of meicp's flutter analysis of the sliding
@@ -37,11 +37,11 @@ import time
 import numpy as np
 import scipy.linalg as sl
 
-from bench_common import Stage, csv_path, slepc_eigensolve, write_rows
-from bench_scenes import halves, lattice_shape, two_layer_scene
+from bench_common import Stage, csv_path, halves, lattice_shape, slepc_eigensolve, write_rows
 from meicp.contact import flutter as fl
 from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
+from meicp.examples import two_layer_scene
 
 MU = 2.0
 ACCURACY_FIELDS = ["dofs", "retained", "path", "growth", "frequency", "sigma_real", "sigma_imag", "growth_qz",

@@ -24,10 +24,11 @@ import time
 import numpy as np
 
 from bench_common import csv_path, slepc_eigensolve, write_rows
-from bench_scenes import two_layer_scene
 import meicp
 from meicp.contact import pencil
-from meicp.petsc.mat import is_petsc_mat, mat_from_scipy
+from meicp.core.matrix import is_petsc_mat
+from meicp.examples import two_layer_scene
+from meicp.petsc.mat import mat_from_scipy
 
 FAMILY = ["nx", "rows", "dofs", "J", "state", "shear", "mu", "divergence", "test", "sigma", "seconds", "evidence"]
 CHECK = ["nx", "rows", "J", "state", "shear", "mu", "truth", "window", "agree", "test"]

@@ -1,7 +1,5 @@
 """The condensation onto the contact DOFs (serial), its certificates against the enumeration
 oracle, and the condensed divergence proofs (issue 14, T1/T2)."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,8 +20,7 @@ from meicp.lcp.certificates import (certified_mu_lower_bound, h_certificate, opt
 from meicp.lcp.classes import classify
 from meicp.petsc.schur import dense_schur, mumps_factor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 
 def split(nx=9, mu=1.3, states="slip-", shear=0.5, rows=(2, 2), **kw):

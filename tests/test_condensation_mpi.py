@@ -1,6 +1,4 @@
 """The condensation and the condensed proofs on 2 ranks: the same answers as serially."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,8 +12,7 @@ from meicp.lattice.assembly import assemble_scipy
 from meicp.lattice.model import LatticeModel
 from meicp.petsc.schur import dense_schur, mumps_factor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 pytestmark = pytest.mark.mpi(min_size=2)
 

@@ -4,7 +4,6 @@ The tests read the verdict's fields (:class:`~meicp.contact.divergence.Divergenc
 evidence sentence is checked once, by the test of the step that makes it."""
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,10 +16,9 @@ from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of,
 from meicp.contact.divergence.condensed import CondensedProof, prove_no_divergence
 from meicp.contact.problem import pencil
 from meicp.contact.result import InstabilityResult
+from meicp.examples import two_layer_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
 
 
 def _scene(nx, rows, state, mu, shear=0.5):

@@ -17,7 +17,7 @@ from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
 from meicp.core.errors import ProblemError
 from meicp.io.scene import scene_from_dict
-from meicp.petsc.mat import to_dense
+from meicp.core.matrix import to_dense
 
 from .conftest import ROOT, meicp_cmd, run
 

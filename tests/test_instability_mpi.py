@@ -77,12 +77,8 @@ def test_the_verdict_at_scale_is_the_same_on_one_and_two_ranks(comm, state, mu, 
     """Past the enumeration budget (60 sliding contacts): the Rayleigh bound, the σ-window
     and its condensed proof, and the search from the window's top give the same verdict,
     proof and σ on 2 ranks as on 1."""
-    import sys
-
     from meicp import analyze
-
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from bench_scenes import two_layer_scene
+    from meicp.examples import two_layer_scene
 
     scene = two_layer_scene(60, (2, 2), mu=mu, states=state, shear=0.5)
     par = analyze(scene, comm=comm, flutter=False)

@@ -16,6 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 from scipy.optimize import linprog
 
+from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError, ProblemError
 from ..core.machine import available_memory
 from ..eicp.enumeration import MAX_J
@@ -24,7 +25,6 @@ from ..eicp.solve import solve_eicp
 from ..lattice.model import LatticeModel
 from ..lattice.size import check_size
 from ..petsc.assembly import assemble
-from ..petsc.comm import mpi_comm
 from ..petsc.pencil import reduced_pencil
 from ..scene import Scene
 from .condensation import lift

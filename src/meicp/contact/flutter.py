@@ -37,11 +37,12 @@ import numpy as np
 import scipy.linalg as sl
 import scipy.sparse as sp
 
+from ..core.comm import available_memory_on, comm_size, mpi_comm
+from ..core.matrix import is_petsc_mat, to_dense
 from ..lattice.assembly import assemble_scipy
 from ..lattice.model import LatticeModel
-from ..petsc.comm import available_memory_on, comm_size, mpi_comm
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
-from ..petsc.mat import is_petsc_mat, mat_from_scipy, to_dense
+from ..petsc.mat import mat_from_scipy
 from .maps import contact_sets, reduced_system
 from .problem import pencil_of
 from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair

@@ -33,6 +33,7 @@ import time
 
 import numpy as np
 
+from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.errors import ProblemError
 from ..core.progress import Progress
 from ..core.validation import as_real, check_tol
@@ -40,7 +41,7 @@ from ..eicp.solve import available_methods
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..lattice.size import check_size
-from ..petsc.comm import available_memory_on, comm_size, index_max, mpi_comm
+from ..petsc.comm import index_max
 from ..petsc.mat import destroying
 from ..petsc.stages import stage
 from ..scene import Scene

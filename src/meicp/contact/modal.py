@@ -27,12 +27,13 @@ import time
 import numpy as np
 
 from ..core.errors import ConvergenceError
+from ..core.matrix import is_petsc_mat, max_abs_entry
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..petsc.eigen import solve_ghep
 from ..petsc.inertia import nonnegative_count, rounding_margin
-from ..petsc.mat import destroying, is_petsc_mat, mat_from_scipy, max_abs_entry, vec_to_numpy
+from ..petsc.mat import destroying, mat_from_scipy, vec_to_numpy
 from ..petsc.stages import stage
 from ..scene import Scene
 from .problem import pencil_of

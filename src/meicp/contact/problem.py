@@ -13,11 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError
+from ..core.matrix import is_petsc_mat
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
-from ..petsc.comm import mpi_comm
-from ..petsc.mat import destroying, is_petsc_mat
+from ..petsc.mat import destroying
 from ..petsc.pencil import reduced_pencil
 from ..scene import SOLVE, Scene
 from .maps import ContactSet, ReducedSystem, contact_sets, reduced_system

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..scene import Scene
 from .lattice_output import UNITS_CONVENTION
 from .results_records import critical_friction_record

@@ -17,10 +17,11 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
+from ..core.matrix import is_petsc_mat
 from ..core.validation import is_symmetric
 from . import import_petsc
-from .comm import mpi_comm
-from .mat import destroying, is_petsc_mat, mat_from_scipy, symmetric_part
+from .mat import destroying, mat_from_scipy, symmetric_part
 from .options import INERTIA, OptionsScope
 
 PREFIX = INERTIA

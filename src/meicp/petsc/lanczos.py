@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import math
 
+from ..core.matrix import is_petsc_mat
 from . import import_petsc, import_slepc
 from .inertia import diagonal_minimum
-from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
+from .mat import mat_from_scipy, symmetric_part
 from .options import WINDOW, OptionsScope
 
 

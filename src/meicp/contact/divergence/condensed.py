@@ -21,8 +21,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ...core.comm import mpi_comm
 from ...lcp.certificates import optimise_scaling, pd_certificate
-from ...petsc.comm import mpi_comm
 from ..condenser import Condenser, on_root
 from .cover import Cover, cover
 

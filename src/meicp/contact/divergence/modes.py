@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.matrix import max_abs_entry
 from ...eicp.problem import lam_floor
-from ...petsc.mat import max_abs_entry
 from ..result import Mode
 
 

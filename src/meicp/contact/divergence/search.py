@@ -17,8 +17,8 @@ import logging
 import time
 from dataclasses import dataclass, replace
 
+from ...core.errors import PetscOptionError
 from ...eicp.solve import solve_eicp
-from ...petsc.options import PetscOptionError
 from .modes import FoundModes, certified_modes
 
 #: support updates of the first, short search from the window's top (before the proof), and

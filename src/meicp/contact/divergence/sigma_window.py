@@ -19,8 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from ...core.matrix import max_abs_entry
 from ...petsc.lanczos import largest_ritz_value
-from ...petsc.mat import max_abs_entry
 from ..rayleigh import rayleigh_bound, symmetric_part_definite
 
 #: a Ritz value of (sym A, sym B) above this multiple of max|A|/max|B| is positive beyond
