@@ -83,7 +83,7 @@ def accuracy(sizes) -> None:
                 t0 = time.perf_counter()
                 res = fl.pencil_flutter(pen, scene, **kw)
                 seconds = time.perf_counter() - t0
-                sigma = res.modes[0][0] if res.modes else complex("nan")
+                sigma = res.modes[0].sigma if res.modes else complex("nan")
                 g, f = growth_frequency(sigma) if res.modes else (float("nan"), float("nan"))
                 label = path if kw else ("dense" if res.complete else "search")
                 rows.append({"dofs": scene.n_dofs, "retained": pen.maps.retained.size, "path": label,
@@ -128,9 +128,9 @@ def cost(sizes, repeats: int, check: bool, check_targets: int = 6, check_restart
                    "paired_ratios": " ".join(f"{p:.2f}" for p in pairs),
                    "baseline_peak_mb": f"{peaks[0]:.0f}", "search_peak_mb": f"{peaks[1]:.0f}",
                    "load1": f"{statistics.median(loads):.1f}", "verdict": res.flutter,
-                   "growth": growth_frequency(fastest[0])[0] if fastest else "",
-                   "frequency": growth_frequency(fastest[0])[1] if fastest else "",
-                   "residual": fastest[2] if fastest else "", "machine": platform.node()}
+                   "growth": growth_frequency(fastest.sigma)[0] if fastest else "",
+                   "frequency": growth_frequency(fastest.sigma)[1] if fastest else "",
+                   "residual": fastest.residual if fastest else "", "machine": platform.node()}
             if check:
                 g = row["growth"] or 0.1
                 t0 = time.perf_counter()
@@ -142,10 +142,10 @@ def cost(sizes, repeats: int, check: bool, check_targets: int = 6, check_restart
                                           options={"eps_max_it": check_restarts})
                 row["check_seconds"] = f"{time.perf_counter() - t0:.1f}"
                 if sweep.modes:
-                    g_check = growth_frequency(sweep.modes[0][0])[0]
+                    g_check = growth_frequency(sweep.modes[0].sigma)[0]
                     row["check_growth"] = g_check
                     row["check_ratio"] = f"{row['growth'] / g_check:.6f}" if fastest else ""
-                    same = fastest and abs(sweep.modes[0][0] - fastest[0]) <= 1e-6 * abs(fastest[0])
+                    same = fastest and abs(sweep.modes[0].sigma - fastest.sigma) <= 1e-6 * abs(fastest.sigma)
                     row["check_note"] = ("the sweep's fastest is the search's mode" if same else
                                          "different modes: the search's fastest is a lower bound on the growth"
                                          if fastest and g_check > row["growth"] else

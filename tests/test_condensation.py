@@ -9,7 +9,7 @@ from scipy.linalg import eigh
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
 from meicp.contact.condenser import held_factor, refined_solve
-from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.divergence.condensed import prove_no_divergence
 from meicp.contact.maps import contact_sets, reduced_system
 from meicp.contact.problem import pencil
 from meicp.eicp.solve import solve_eicp

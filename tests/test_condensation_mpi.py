@@ -5,7 +5,7 @@ import pytest
 from mpi4py import MPI
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
-from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.divergence.condensed import prove_no_divergence
 from meicp.contact.maps import contact_sets, reduced_system
 from meicp.contact.problem import pencil
 from meicp.lattice.assembly import assemble_scipy

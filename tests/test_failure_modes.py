@@ -70,7 +70,7 @@ def test_flutter_lattice_analyze_says_no_divergence_mode():
     assert r.divergence is False and r.modes == [] and "no solution with σ ≥ 0" in r.evidence
     assert r.flutter is True and r.stable is False  # the complex σ: flutter of steady sliding (issue 15)
     r = meicp.analyze(sc, method="active-set")  # the large-problem path agrees, with its own proof
-    assert r.divergence is False and r.modes == [] and r.proofs[0]["test"] == "condensed-windows"
+    assert r.divergence is False and r.modes == [] and r.proofs[0].test == "condensed-windows"
 
 
 # ----------------------------------------------------------------------------- μ across μ_c

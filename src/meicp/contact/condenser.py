@@ -40,12 +40,13 @@ from ..lattice.assembly import assemble_scipy
 from ..lattice.node_blocks import NodeBlocks, node_of
 from ..petsc.comm import to_petsc_comm
 from ..petsc.eigen import inverse_estimate, solve_ghep
-from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative, rounding_margin
+from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy
 from ..petsc.mumps_c import MumpsError
 from ..petsc.options import SCHUR
 from ..petsc.schur import MumpsFactor, mumps_factor, schur_series
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
+from .rayleigh import pencil_is_negative
 
 log = logging.getLogger("meicp")
 
@@ -398,7 +399,7 @@ def refined_solve(factor, KFF, steps: int = REFINE_STEPS):
 def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
     """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
     use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
-    (:func:`~meicp.petsc.inertia.pencil_is_negative`), which also proves K̃_FF ≻ 0.
+    (:func:`~meicp.contact.rayleigh.pencil_is_negative`), which also proves K̃_FF ≻ 0.
     ``(None, why)`` when not certified.  ``pad``: as for :func:`held_factor`."""
     pad = pad or (lambda H: H)
     with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
@@ -421,7 +422,7 @@ def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
 
 
 def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
-    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`)
+    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.contact.rayleigh.pencil_is_negative`)
     proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  ``pad``: as for
     :func:`held_factor`.  Collective."""
     shifted = (tau * MFF - KFF).tocsr()

@@ -18,11 +18,11 @@ import math
 from dataclasses import dataclass, field
 
 from ..petsc.assembly import assemble
-from ..petsc.inertia import rayleigh_bound
 from ..petsc.mat import combination, destroying
 from ..petsc.pencil import reduced_pencil
 from .maps import friction_part
 from .problem import Pencil
+from .rayleigh import rayleigh_bound
 
 #: LDLᵀ inertias (each about one sparse factorisation of the pencil) spent locating t_R
 FACTORISATIONS = 8

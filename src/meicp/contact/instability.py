@@ -45,7 +45,7 @@ from ..petsc.comm import index_max
 from ..petsc.mat import destroying
 from ..petsc.stages import stage
 from ..scene import Scene
-from .divergence import divergence_of
+from .divergence import all_held, divergence_of
 from .flutter import analyze_flutter, not_analysed
 from .maps import grazing_cases
 from .modal import has_contact, modal_analysis
@@ -112,12 +112,12 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
     # -- one MEiCP per grazing case -------------------------------------------------------
     method = method or scene.solver.method
-    modes, evidences, stable_flags, eicps, proofs, sliding = [], [], [], [], [], None
+    verdicts, sliding = [], None
     n_grazing = sum(s == "grazing" for cs in sets for s in cs.states)
     progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
     with destroying(K, M):
         for k, case in enumerate(grazing_cases(sets)):
-            progress.update(k, detail=f"{len(modes)} mode(s) so far")
+            progress.update(k, detail=f"{sum(len(v.modes) for v in verdicts)} mode(s) so far")
             t0 = time.perf_counter()
             with stage("reduce"):
                 pen = pencil_of(K, M, model, sets, case, static)
@@ -129,39 +129,31 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 log.info("MEiCP: %d retained DOFs, %d complementarity pairs%s", red.retained.size, red.J.size,
                          f", grazing case {case}" if case else "")
                 if red.retained.size == 0:
-                    evidences.append("every DOF is held (fixed or sticking): no mode can exist")
-                    stable_flags.append(True)
-                    eicps.append(None)
-                    proofs.append({"test": "all-held", "statement": evidences[-1]})
+                    verdicts.append(all_held())
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    modes_c, evidence, stable, eicp, proof = divergence_of(pen, scene, comm, method, lam_min, tol,
-                                                                   solver_options)
+                    verdict = divergence_of(pen, scene, comm, method, lam_min, tol, solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):
                         sliding = analyze_flutter(K, M, model, sets, scene, comm, pencil=pen, static=static,
                                                   options=dict(scene.petsc))
-            modes += modes_c
-            evidences.append(evidence)
-            stable_flags.append(stable)
-            eicps.append(eicp)
-            proofs.append(proof)
+            verdicts.append(verdict)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):
                 sliding = analyze_flutter(K, M, model, sets, scene, comm, static=static, options=dict(scene.petsc))
-    modes.sort(key=lambda m: -m.sigma)
-    result.modes = modes
-    result.eicp = eicps
-    result.proofs = proofs
+    result.modes = sorted((m for v in verdicts for m in v.modes), key=lambda m: -m.sigma)
+    result.eicp = [v.eicp for v in verdicts]
+    result.proofs = [v.proof for v in verdicts]
+    stable_flags = [v.stable for v in verdicts]
     if any(s is False for s in stable_flags):  # a mode with σ ≥ 0, listed or not (lam_min)
         result.divergence = True
     elif all(s is True for s in stable_flags):
         result.divergence = False
     else:
         result.divergence = None
-    result.evidence = " | ".join(evidences)
+    result.evidence = " | ".join(v.evidence for v in verdicts)
     sliding = sliding or not_analysed("flutter = false")
     result.flutter, result.flutter_modes, result.flutter_evidence = sliding.flutter, sliding.modes, sliding.evidence
     result.compose_verdict()

@@ -32,11 +32,12 @@ from ..eicp.problem import EiCPProblem, certify_pair
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import assemble
 from ..petsc.eigen import solve_ghep
-from ..petsc.inertia import nonnegative_count, pencil_is_negative, rounding_margin
+from ..petsc.inertia import nonnegative_count, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy, vec_to_numpy
 from ..petsc.stages import stage
 from ..scene import Scene
 from .problem import pencil_of
+from .rayleigh import pencil_is_negative
 from .result import InstabilityResult, Mode
 
 log = logging.getLogger("meicp")

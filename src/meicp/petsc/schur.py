@@ -10,7 +10,7 @@ parallel only when the whole Schur index set is given on rank 0 ("MUMPS distribu
 Schur complements not yet supported from PETSc" otherwise): MUMPS then returns the Schur
 complement centralised on the host, a SeqDense on rank 0, which is broadcast.  The Schur
 complement comes without a residual: its error is measured by the caller
-(:func:`meicp.contact.divergence_proof.prove_no_divergence` probes it with :class:`MumpsFactor`).
+(:func:`meicp.contact.divergence.condensed.prove_no_divergence` probes it with :class:`MumpsFactor`).
 
 :class:`MumpsFactor` is the fallback and the solver of the probes and lifts: one MUMPS
 factorisation, ``Mat.matSolve`` on dense blocks.  Options under ``-meicp_schur_``.
