@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 import meicp
-from bench_common import Stage, csv_path, release_memory, write_rows
-from bench_scenes import halves, lattice_shape, two_layer_scene
+from bench_common import Stage, csv_path, halves, lattice_shape, release_memory, write_rows
+from meicp.examples import two_layer_scene
 from meicp.petsc import import_petsc
 from meicp.petsc.mat import nonzeros, storage_bytes
 

@@ -1,6 +1,7 @@
 """What every benchmark script measures with, in one place: where results go (CSV rows
 appended to what is kept of the file, written under a temporary name and renamed, never
-half-written), wall time, peak memory, and one reference SLEPc eigen-solve.
+half-written), wall time, peak memory, one reference SLEPc eigen-solve, and the lattice
+shape of a DOF count (the scene itself is :func:`meicp.examples.two_layer_scene`).
 
 Results go to ``$MEICP_BENCH_DIR`` if set (``make bench`` quick mode: ``build/benchmarks``),
 else ``docs/benchmarks`` (the committed full-mode results).  The scripts run with the
@@ -42,6 +43,12 @@ def csv_path(name: str) -> Path:
     return out_dir() / f"{name}.csv"
 
 
+def read_rows(path) -> list[dict]:
+    """The rows of a benchmark CSV, as dicts of strings."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
 def write_rows(path, rows: list, fields: list, keep=lambda row: True) -> None:
     """Write ``rows`` after the existing rows for which ``keep(row)`` is true."""
     path = Path(path)
@@ -56,6 +63,22 @@ def write_rows(path, rows: list, fields: list, keep=lambda row: True) -> None:
         w.writeheader()
         w.writerows(kept + rows)
     os.replace(tmp, path)
+
+
+# ----------------------------------------------------------------------------- sizes
+
+def lattice_shape(dofs: int) -> tuple[int, int]:
+    """``(nx, ny)`` with nx = 2·ny and about ``dofs`` DOFs; 10^6 exactly is 1000 × 500 (the
+    lattice of data/scenes/extensive.toml)."""
+    if dofs == 1_000_000:
+        return 1000, 500
+    ny = max(2, 2 * round(math.sqrt(dofs / 4) / 2))
+    return 2 * ny, ny
+
+
+def halves(ny: int) -> tuple[int, int]:
+    """``ny`` rows split into (lower, upper), the lower layer the thinner when ny is odd."""
+    return ny // 2, ny - ny // 2
 
 
 # ----------------------------------------------------------------------------- memory

@@ -19,8 +19,8 @@ import os
 import statistics
 
 from bench_common import Stage, csv_path, write_rows
-from bench_scenes import two_layer_scene
 from meicp.contact.critical_friction import critical_friction
+from meicp.examples import two_layer_scene
 
 FIELDS = ["nx", "rows", "dofs", "J", "ranks", "states", "shear", "lower", "upper", "width", "exact", "seconds",
           "repeats", "peak_mb", "load1", "evidence"]

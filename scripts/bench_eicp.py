@@ -27,8 +27,8 @@ import numpy as np
 import scipy.linalg
 
 import meicp
-from bench_common import csv_path, peak_rss_bytes, slepc_eigensolve, write_rows
-from bench_scenes import halves, two_layer_scene
+from bench_common import csv_path, halves, peak_rss_bytes, slepc_eigensolve, write_rows
+from meicp.examples import two_layer_scene
 from meicp.lattice.model import LatticeModel
 from meicp.petsc.assembly import principal_submatrix
 

@@ -47,7 +47,6 @@ from __future__ import annotations
 import argparse
 import itertools
 import time
-import tomllib
 import warnings
 
 import numpy as np
@@ -55,111 +54,26 @@ import scipy.linalg as sla
 
 import meicp
 from bench_common import csv_path, write_rows
-from bench_scenes import two_layer_scene
-from meicp.contact import pencil as meicp_pencil
-from meicp.contact.static import prescribed_displacements
 from meicp.core.errors import ConvergenceError, ProblemError
-from meicp.lattice.model import LatticeModel
+from meicp.examples.failure_map import (MU_C, all_eicp_solutions, all_lcp_solutions, dense_pencil, mode_coupling,
+                                        slip_lcp, slip_lcp_data, two_layers, z_family)
 from meicp.lcp.siconos import siconos_solve
 
 FIELDS = ["sweep", "problem", "param", "method", "settings", "ranks", "wall_s", "iterations", "status",
           "outcome", "error", "reference", "answer", "residual", "classes", "detail"]
 
-MU_C = 1.90603249  # two_layers.toml, data/scenes/README.md's value (also recomputed by bisection below)
 EIG_METHODS = ("enumerate", "active-set", "rayleigh", "semismooth")
 LCP_METHODS = ("lemke", "enumerate", "pgs", "newton", "tao", "auto")
 SICONOS = ("lemke", "enum", "newton-fb", "pgs")
 
 
-# ----------------------------------------------------------------------------- scenes
-
-def scene(mu=3.0, kB=5.0, shear=0.0, states='"slip+"'):
-    """data/scenes/two_layers.toml (nx = 5, 2 + 2 rows, top held, load, eps_tol = 1e-10) with
-    its friction μ, upper stiffness k_B, shear and base states (a TOML value) replaced."""
-    return two_layer_scene(5, (2, 2), mu=mu, stiffness=(1.0, kB), shear=shear,
-                           states=tomllib.loads(f"states = {states}")["states"], load=(0.06, -0.1),
-                           petsc={"eps_tol": 1e-10}, title="two layers on a rough base")
-
-
-def pencil(sc):
-    """(A, B, J) of the scene's contact states, dense: A = −PKQ, B = PMQ."""
-    pen = meicp_pencil(sc)
-    return pen.A.toarray(), pen.B.toarray(), pen.J
-
-
-# ----------------------------------------------------------------------------- references
-
-def ref_eicp(A, B, J, lam_min=None):
-    """Every MEiCP solution by brute force: each support S ⊆ J, scipy.linalg.eig of the
-    reduced pencil on F ∪ S, sign and dual tests.  Returns (list of (λ, support tuple),
-    number of complex eigenvalues met with Re ≥ lam_min (or any), max |Im| / |λ|)."""
-    n = A.shape[0]
-    J = np.asarray(J, dtype=int)
-    F = np.setdiff1d(np.arange(n), J)
-    scale = np.abs(A).max()
-    sols, ncomplex = [], 0
-    for k in range(J.size + 1):
-        for S in itertools.combinations(J.tolist(), k):
-            R = np.concatenate([F, np.array(S, dtype=int)])
-            if R.size == 0:
-                continue
-            lam, V = sla.eig(A[np.ix_(R, R)], B[np.ix_(R, R)])
-            for l, v in zip(lam, V.T):
-                if not np.isfinite(l):
-                    continue
-                if abs(l.imag) > 1e-8 * max(1.0, abs(l)):
-                    if lam_min is None or l.real >= lam_min:
-                        ncomplex += 1
-                    continue
-                l = float(l.real)
-                if lam_min is not None and l < lam_min - 1e-12:
-                    continue
-                v = v.real / np.abs(v.real).max()
-                if k:
-                    if v[F.size:].sum() < 0:
-                        v = -v
-                    if v[F.size:].min() <= 1e-9:
-                        continue
-                x = np.zeros(n)
-                x[R] = v
-                w = l * (B @ x) - A @ x
-                out = np.setdiff1d(J, S)
-                s = scale + abs(l) * np.abs(B).max()
-                if out.size and w[out].min() < -1e-9 * s:
-                    continue
-                if np.abs(w[R]).max() > 1e-8 * s:
-                    continue
-                if not any(abs(l - m) <= 1e-9 * max(1, abs(l)) and S == T for m, T in sols):
-                    sols.append((l, tuple(S)))
-    return sols, ncomplex
-
-
-def ref_lcp(M, q):
-    """Every solution of LCP(q, M) by brute force over the 2^n supports (nonsingular blocks;
-    the sweeps' matrices have no singular principal block, which the code checks)."""
-    n = q.size
-    sols, singular = [], 0
-    for k in range(n + 1):
-        for S in itertools.combinations(range(n), k):
-            S = list(S)
-            x = np.zeros(n)
-            if k:
-                MS = M[np.ix_(S, S)]
-                if np.linalg.cond(MS) > 1e12:
-                    singular += 1
-                    continue
-                x[S] = np.linalg.solve(MS, -q[S])
-            w = M @ x + q
-            if x.min() >= -1e-12 * max(1.0, np.abs(x).max()) and w.min() >= -1e-10 * np.abs(q).max():
-                sols.append(np.maximum(x, 0.0))
-    return sols, singular
-
+# ----------------------------------------------------------------------------- μ_c by bisection on the brute force
 
 def mu_c_reference(make, lo=0.0, hi=10.0, rtol=1e-9):
     """μ_c by bisection on the existence of a σ ≥ 0 mode in the brute-force reference."""
     def exists(mu):
-        A, B, J = pencil(make(mu))
-        return bool(ref_eicp(A, B, J, lam_min=0.0)[0])
+        A, B, J = dense_pencil(make(mu))
+        return bool(all_eicp_solutions(A, B, J, lam_min=0.0)[0])
     if not exists(hi):
         return np.inf
     if exists(lo):
@@ -282,15 +196,15 @@ def sweep_mu(quick):
     mus = ([0.0, 1.0, 1.8, MU_C * (1 - 1e-6), MU_C * (1 + 1e-6), 2.0, 3.0] if quick else
            [0.0, 0.25, 0.5, 1.0, 1.5, 1.8, 1.9, MU_C * (1 - 1e-4), MU_C * (1 - 1e-6), MU_C * (1 + 1e-6),
             MU_C * (1 + 1e-4), 1.92, 2.0, 2.5, 3.0, 3.8])
-    mu_c_ref = mu_c_reference(lambda m: scene(mu=m), rtol=1e-13)
+    mu_c_ref = mu_c_reference(lambda m: two_layers(mu=m), rtol=1e-13)
     # μ_c(1 ± 1e-10): σ = ∓5e-11; before the fix of issue 7 the −5e-11 counted as a mode
     mus = sorted(mus + [mu_c_ref * (1 - 1e-10), mu_c_ref * (1 + 1e-10)])
     rows = []
     for mu in mus:
-        sc = scene(mu=mu)
-        A, B, J = pencil(sc)
-        ref, nc = ref_eicp(A, B, J, lam_min=0.0)
-        top = max(l for l, _ in ref_eicp(A, B, J)[0])  # the largest real MEiCP σ, any sign
+        sc = two_layers(mu=mu)
+        A, B, J = dense_pencil(sc)
+        ref, nc = all_eicp_solutions(A, B, J, lam_min=0.0)
+        top = max(l for l, _ in all_eicp_solutions(A, B, J)[0])  # the largest real MEiCP σ, any sign
         common = dict(sweep="mu", problem=f"two_layers mu={mu:.10g}", param=f"{mu:.10g}", settings="lam_min=0",
                       ranks=1, reference=_ref_text(ref, nc), classes=f"largest real sigma={top:.6g}")
         run_eicp_methods(A, B, J, ref, 0.0, common, rows)
@@ -303,10 +217,10 @@ def sweep_contrast(quick):
     ratios = [1, 1e2, 1e4, 1e6] if quick else [1, 10, 1e2, 1e3, 1e4, 1e5, 1e6]
     rows = []
     for ratio in ratios:
-        make = (lambda m, kB=float(ratio): scene(mu=m, kB=kB))
+        make = (lambda m, kB=float(ratio): two_layers(mu=m, kB=kB))
         sc = make(3.0)
-        A, B, J = pencil(sc)
-        ref, nc = ref_eicp(A, B, J, lam_min=0.0)
+        A, B, J = dense_pencil(sc)
+        ref, nc = all_eicp_solutions(A, B, J, lam_min=0.0)
         mu_c_ref = mu_c_reference(make, hi=50.0)
         common = dict(sweep="contrast", problem=f"two_layers kB/kA={ratio:g} mu=3", param=f"{ratio:g}",
                       settings="lam_min=0", ranks=1, reference=_ref_text(ref, nc))
@@ -315,11 +229,6 @@ def sweep_contrast(quick):
         print(f"kB/kA={ratio:g}: ref {common['reference']} mu_c {mu_c_ref:.8g} cond(A) {np.linalg.cond(A):.2e}",
               flush=True)
     return rows
-
-
-def z_family(delta, n=8, a=0.5):
-    A = -(a * (np.ones((n, n)) - np.eye(n)) + np.eye(n) + delta * np.diag(np.arange(n, dtype=float)))
-    return A, np.eye(n)
 
 
 def sweep_degenerate(quick):
@@ -346,13 +255,13 @@ def sweep_degenerate(quick):
         print(f"z delta={d:g}: " + " ".join(f"{r['method']}={r['outcome']}" for r in rows[-4:]), flush=True)
     # mirror twins: two uncoupled copies of the two_layers pencil, the second at μ = 3(1 + δ)
     for d in deltas:
-        A1, B1, J1 = pencil(scene(mu=3.0))
-        A2, B2, J2 = pencil(scene(mu=3.0 * (1 + d)))
+        A1, B1, J1 = dense_pencil(two_layers(mu=3.0))
+        A2, B2, J2 = dense_pencil(two_layers(mu=3.0 * (1 + d)))
         n1 = A1.shape[0]
         A, B = sla.block_diag(A1, A2), sla.block_diag(B1, B2)
         J = np.concatenate([J1, J2 + n1])
-        ref1, _ = ref_eicp(A1, B1, J1, lam_min=0.0)
-        ref2, _ = ref_eicp(A2, B2, J2, lam_min=0.0)
+        ref1, _ = all_eicp_solutions(A1, B1, J1, lam_min=0.0)
+        ref2, _ = all_eicp_solutions(A2, B2, J2, lam_min=0.0)
         # block-diagonal MEiCP: its λ values are those of either block (x = (αξ₁, βξ₂))
         ref = ref1 + ref2
         common = dict(sweep="degenerate", problem=f"twin two_layers mu=3,3(1+{d:g})", param=f"{d:g}",
@@ -362,28 +271,13 @@ def sweep_degenerate(quick):
     return rows
 
 
-def mode_coupling(gamma):
-    """A nonsymmetric 8×8 pencil: a 2×2 block [[1.5, γ], [−γ, 0.5]] (real σ 1 ± √(0.25 − γ²),
-    complex for γ > 1/2) coupled weakly to a stable part; J = the last three DOFs."""
-    n = 8
-    rng = np.random.default_rng(7)
-    C = rng.uniform(-0.05, 0.05, (n, n))
-    C = 0.5 * (C + C.T)
-    C[:2, :2] = 0.0
-    A = np.diag([1.5, 0.5, -1.0, -1.5, -2.0, -2.5, -3.0, -3.5]) + C
-    A[0, 1] += gamma
-    A[1, 0] -= gamma
-    B = np.diag(np.concatenate([[1.0, 1.0], rng.uniform(0.8, 1.2, n - 2)]))
-    return A, B, np.arange(5, 8)
-
-
 def sweep_flutter(quick):
     gammas = [0.0, 0.3, 0.45, 0.5, 0.55, 0.7, 1.0] if quick else \
         [0.0, 0.1, 0.2, 0.3, 0.4, 0.45, 0.48, 0.5, 0.52, 0.55, 0.6, 0.7, 0.85, 1.0, 1.5]
     rows = []
     for g in gammas:
         A, B, J = mode_coupling(g)
-        ref, nc = ref_eicp(A, B, J, lam_min=0.0)
+        ref, nc = all_eicp_solutions(A, B, J, lam_min=0.0)
         ev = sla.eigvals(A, B)
         common = dict(sweep="flutter", problem=f"mode_coupling gamma={g:g}", param=f"{g:g}", settings="lam_min=0",
                       ranks=1, reference=_ref_text(ref, nc),
@@ -393,9 +287,9 @@ def sweep_flutter(quick):
     mus = [0.5, 1.0, 2.0, 4.0, 8.0] if quick else [0.5, 1.0, 1.5, 1.75, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0]
     states = '["stick", "slip+", "slip+", "slip+", "stick"]'
     for mu in mus:
-        sc = scene(mu=mu, shear=0.5, states=states)
-        A, B, J = pencil(sc)
-        ref, nc = ref_eicp(A, B, J, lam_min=0.0)
+        sc = two_layers(mu=mu, shear=0.5, states=states)
+        A, B, J = dense_pencil(sc)
+        ref, nc = all_eicp_solutions(A, B, J, lam_min=0.0)
         ev = sla.eigvals(A, B)
         top = ev[np.argmax(ev.real)]
         common = dict(sweep="flutter", problem=f"sheared stick/slip mu={mu:g}", param=f"{mu:g}",
@@ -405,37 +299,6 @@ def sweep_flutter(quick):
         run_analyze(sc, ref, common, rows)
         print(f"sheared mu={mu:g}: ref {common['reference']} {common['classes']}", flush=True)
     return rows
-
-
-def slip_lcp_data():
-    """G_nn, G_nt, c_n of the two_layers lattice: gap and slip of the base nodes per unit
-    normal / tangential reaction (condensed compliance), and the gap under the load."""
-    sc = scene(mu=3.0)
-    m = LatticeModel(sc)
-    K, _ = meicp.assemble(m)
-    K = K.toarray()
-    presc, up, _ = prescribed_displacements(m, sc.load)
-    free = m.free_dofs()
-    pos = {int(d): i for i, d in enumerate(free)}
-    nodes = m.contact_nodes()
-    En = np.zeros((free.size, nodes.size))
-    Et = np.zeros_like(En)
-    for k, nd in enumerate(nodes):
-        En[pos[2 * nd + 1], k] = 1.0
-        Et[pos[2 * nd], k] = 1.0
-    Kff = K[np.ix_(free, free)]
-    sol = np.linalg.solve(Kff, np.hstack([En, Et, -K[np.ix_(free, presc)] @ up[:, None]]))
-    nc = nodes.size
-    return En.T @ sol[:, :nc], En.T @ sol[:, nc:2 * nc], (En.T @ sol[:, -1])
-
-
-def slip_lcp(mu, data=None):
-    """LCP(q, M) of the static slip problem at friction μ under the compressive load:
-    M = G_nn − μ G_nt and q = c_n, each scaled to max |entry| = 1.  ``data``: the
-    (G_nn, G_nt, c_n) of ``slip_lcp_data()``, to reuse across μ (computed if None)."""
-    Gnn, Gnt, cn = slip_lcp_data() if data is None else data
-    M = Gnn - mu * Gnt
-    return M / np.abs(M).max(), cn / np.abs(cn).max()
 
 
 def judge_lcp(method, res, ref):
@@ -484,7 +347,7 @@ def sweep_lcp(quick):
     for load, q in loads.items():
         for mu in mus:
             M, _ = slip_lcp(mu, data)
-            ref, singular = ref_lcp(M, q)
+            ref, singular = all_lcp_solutions(M, q)
             assert singular == 0
             c = meicp.classify(M)
             cls = (f"P={c.p_matrix} Q={c.q_matrix} R0={c.r0} E0={c.semimonotone} "

@@ -5,7 +5,7 @@ at scale against one SLEPc eigen-solve of the same pencil, with an independent c
     mpirun -n 2 .venv/bin/python scripts/bench_flutter.py cost [--dofs 100000] [--repeats 3] [--check]
     .venv/bin/python scripts/bench_flutter.py chart     # flutter_accuracy.png, flutter_cost.png
 
-Scenes: ``bench_scenes.two_layer_scene`` (nx = 2ny, soft k = 1 under stiff k = 5, top fixed,
+Scenes: ``meicp.examples.two_layer_scene`` (nx = 2ny, soft k = 1 under stiff k = 5, top fixed,
 sides free, every base node slip+), μ = 2.
 
 ``accuracy`` (serial): the fastest flutter mode of meicp's flutter analysis of the sliding
@@ -37,11 +37,11 @@ import time
 import numpy as np
 import scipy.linalg as sl
 
-from bench_common import Stage, csv_path, slepc_eigensolve, write_rows
-from bench_scenes import halves, lattice_shape, two_layer_scene
+from bench_common import Stage, csv_path, halves, lattice_shape, slepc_eigensolve, write_rows
 from meicp.contact import flutter as fl
 from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
+from meicp.examples import two_layer_scene
 
 MU = 2.0
 ACCURACY_FIELDS = ["dofs", "retained", "path", "growth", "frequency", "sigma_real", "sigma_imag", "growth_qz",
@@ -83,7 +83,7 @@ def accuracy(sizes) -> None:
                 t0 = time.perf_counter()
                 res = fl.pencil_flutter(pen, scene, **kw)
                 seconds = time.perf_counter() - t0
-                sigma = res.modes[0][0] if res.modes else complex("nan")
+                sigma = res.modes[0].sigma if res.modes else complex("nan")
                 g, f = growth_frequency(sigma) if res.modes else (float("nan"), float("nan"))
                 label = path if kw else ("dense" if res.complete else "search")
                 rows.append({"dofs": scene.n_dofs, "retained": pen.maps.retained.size, "path": label,
@@ -128,9 +128,9 @@ def cost(sizes, repeats: int, check: bool, check_targets: int = 6, check_restart
                    "paired_ratios": " ".join(f"{p:.2f}" for p in pairs),
                    "baseline_peak_mb": f"{peaks[0]:.0f}", "search_peak_mb": f"{peaks[1]:.0f}",
                    "load1": f"{statistics.median(loads):.1f}", "verdict": res.flutter,
-                   "growth": growth_frequency(fastest[0])[0] if fastest else "",
-                   "frequency": growth_frequency(fastest[0])[1] if fastest else "",
-                   "residual": fastest[2] if fastest else "", "machine": platform.node()}
+                   "growth": growth_frequency(fastest.sigma)[0] if fastest else "",
+                   "frequency": growth_frequency(fastest.sigma)[1] if fastest else "",
+                   "residual": fastest.residual if fastest else "", "machine": platform.node()}
             if check:
                 g = row["growth"] or 0.1
                 t0 = time.perf_counter()
@@ -142,10 +142,10 @@ def cost(sizes, repeats: int, check: bool, check_targets: int = 6, check_restart
                                           options={"eps_max_it": check_restarts})
                 row["check_seconds"] = f"{time.perf_counter() - t0:.1f}"
                 if sweep.modes:
-                    g_check = growth_frequency(sweep.modes[0][0])[0]
+                    g_check = growth_frequency(sweep.modes[0].sigma)[0]
                     row["check_growth"] = g_check
                     row["check_ratio"] = f"{row['growth'] / g_check:.6f}" if fastest else ""
-                    same = fastest and abs(sweep.modes[0][0] - fastest[0]) <= 1e-6 * abs(fastest[0])
+                    same = fastest and abs(sweep.modes[0].sigma - fastest.sigma) <= 1e-6 * abs(fastest.sigma)
                     row["check_note"] = ("the sweep's fastest is the search's mode" if same else
                                          "different modes: the search's fastest is a lower bound on the growth"
                                          if fastest and g_check > row["growth"] else

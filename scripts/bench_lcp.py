@@ -30,7 +30,7 @@ import scipy.sparse.linalg as spla
 
 import meicp
 from bench_common import ROOT, csv_path, timed, write_rows
-from bench_scenes import two_layer_scene
+from meicp.examples import two_layer_scene
 from meicp.io.problem_files import read_siconos_lcp
 from meicp.lcp.siconos import siconos_solve
 from meicp.lcp.solve import solve_lcp

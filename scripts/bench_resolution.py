@@ -53,9 +53,9 @@ import scipy.linalg as sl
 
 import meicp
 from bench_common import Stage, csv_path, write_rows
-from bench_scenes import two_layer_scene
 from meicp.contact import pencil
 from meicp.contact.critical_friction import friction_pencils
+from meicp.examples import two_layer_scene
 
 FIELDS = ["part", "problem", "quantity", "method", "settings", "ranks", "n", "nx", "ny", "spacing", "dofs",
           "retained", "complementarity", "repeat", "wall_s", "iterations", "status", "value", "sigma",

@@ -56,8 +56,8 @@ import scipy.sparse.linalg as spla
 import meicp
 from bench_common import csv_path, timed, write_rows
 from bench_lcp import condensed, lattice
-from bench_scenes import two_layer_scene
 from meicp.contact import pencil
+from meicp.examples import two_layer_scene
 from meicp.lcp.problem import LCPProblem, relative_residual
 from meicp.lcp.siconos import siconos_solve
 from meicp.lcp.solve import solve_lcp

@@ -14,22 +14,16 @@ into ``docs/benchmarks/`` (``$MEICP_BENCH_DIR`` overrides).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 
 import numpy as np
 
 import meicp
 from bench_common import ROOT, csv_path, out_dir, write_rows
+from meicp.examples import with_friction
 
 FIELDS = ["mu", "divergence", "divergence_growth", "flutter", "flutter_growth", "flutter_frequency",
           "flutter_sigma_real", "flutter_sigma_imag", "flutter_modes", "stable"]
-
-
-def with_friction(scene, mu: float):
-    contact = dataclasses.replace(scene.contact, friction=mu) if scene.contact else None
-    interfaces = tuple(dataclasses.replace(i, friction=mu) if i.kind == "frictional" else i for i in scene.interfaces)
-    return dataclasses.replace(scene, contact=contact, interfaces=interfaces)
 
 
 def point(scene, mu: float) -> dict:

@@ -1,7 +1,5 @@
 """The condensation onto the contact DOFs (serial), its certificates against the enumeration
 oracle, and the condensed divergence proofs (issue 14, T1/T2)."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +9,7 @@ from scipy.linalg import eigh
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
 from meicp.contact.condenser_certificates import held_factor, refined_solve
-from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.divergence.condensed import prove_no_divergence
 from meicp.contact.lines import contact_lines
 from meicp.contact.maps import reduced_system
 from meicp.contact.problem import pencil
@@ -23,8 +21,7 @@ from meicp.lcp.certificates import (certified_mu_lower_bound, h_certificate, opt
 from meicp.lcp.classes import classify
 from meicp.petsc.schur import dense_schur, mumps_factor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 
 def split(nx=9, mu=1.3, states="slip-", shear=0.5, rows=(2, 2), **kw):

@@ -1,13 +1,11 @@
 """The condensation and the condensed proofs on 2 ranks: the same answers as serially."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
-from meicp.contact.divergence_proof import prove_no_divergence
+from meicp.contact.divergence.condensed import prove_no_divergence
 from meicp.contact.lines import contact_lines
 from meicp.contact.maps import reduced_system
 from meicp.contact.problem import pencil
@@ -15,8 +13,7 @@ from meicp.lattice.assembly import assemble_scipy
 from meicp.lattice.model import LatticeModel
 from meicp.petsc.schur import dense_schur, mumps_factor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 pytestmark = pytest.mark.mpi(min_size=2)
 

@@ -4,7 +4,6 @@ still gets an honest answer."""
 import json
 import math
 import pickle
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +12,7 @@ import pytest
 import meicp.contact.critical_friction.solve as cf
 from meicp.contact.critical_friction import CriticalFriction, critical_friction
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 SCENES = [(nx, states, shear) for nx in (6, 9, 12) for states in ("slip+", "slip-") for shear in (0.5, -0.5)]
 

@@ -1,7 +1,9 @@
 """The divergence verdict past the enumeration budget (issue 14, :mod:`meicp.contact.divergence`):
-the issue's table rows decided, and the large-problem path never contradicting enumeration."""
+the issue's table rows decided, and the large-problem path never contradicting enumeration.
+The tests read the verdict's fields (:class:`~meicp.contact.divergence.DivergenceProof`); each
+evidence sentence is checked once, by the test of the step that makes it."""
 
-import sys
+import math
 from pathlib import Path
 
 import numpy as np
@@ -10,80 +12,114 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import meicp
-from meicp.contact import divergence
+from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of, search, sigma_window
+from meicp.contact.divergence.condensed import CondensedProof, prove_no_divergence
+from meicp.contact.problem import pencil
+from meicp.contact.result import InstabilityResult
+from meicp.examples import two_layer_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
 
 
 def _scene(nx, rows, state, mu, shear=0.5):
     return two_layer_scene(nx, rows, mu=mu, states=state, shear=shear)
 
 
+def _verdict(scene, method="active-set", **procedures):
+    """The divergence verdict of the scene's one pencil, as ``analyze`` computes it (serial,
+    its default tol and options), with some procedures replaced to reach a branch."""
+    with pencil(scene) as pen:
+        return divergence_of(pen, scene, None, method, 0.0, 1e-10, {}, procedures=Procedures(**procedures))
+
+
+def _stalled(A, B, *, max_it):
+    """Lanczos as in the cluster of slow vibrations: an unconverged Ritz value below 0."""
+    return -1.0, False, 60
+
+
 def test_stable_by_the_rayleigh_bound_past_16_contacts():
-    """nx = 60, 2 + 2 rows, slip+, μ = 1: sym(−A) ≻ 0 (before: inconclusive)."""
+    """nx = 60, 2 + 2 rows, slip+, μ = 1: sym(−A) ≻ 0 (before: inconclusive).  The Rayleigh
+    proof's sentence is checked here."""
     r = meicp.analyze(_scene(60, (2, 2), "slip+", 1.0), flutter=False)
     assert r.divergence is False and r.modes == []
-    assert r.proofs[0]["test"] == "rayleigh-inertia" and "(a proof)" in r.evidence
+    proof = r.proofs[0]
+    assert proof.test == "rayleigh-inertia" and proof.sigma_window == (0.0, math.inf)
+    assert proof.supports_visited == proof.eigen_solves == 0 and r.eicp == [None]
+    assert r.evidence == proof.statement
+    assert r.evidence.startswith("Rayleigh bound (LDLᵀ inertia): sym(A) + η·diag|·| is negative definite")
+    assert r.evidence.endswith("every MEiCP solution has σ = xᵀsym(A)x / xᵀsym(B)x < 0 (a proof)")
 
 
 def test_the_full_support_mode_is_found_from_the_top_of_the_window():
     """nx = 60, 2 + 2 rows, slip−, μ = 3: the full support carries σ = 0.8188 (before:
     cycling among the slow vibrations nearest 0), found by the first search from the short
-    Lanczos run's estimate of the top: no σ-window is certified for a mode."""
-    r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
+    Lanczos run's estimate of the top: no σ-window is certified for a mode.  The certified
+    mode's sentence is checked here."""
+    scene = _scene(60, (2, 2), "slip-", 3.0)
+    r = meicp.analyze(scene, flutter=False)
     assert r.divergence is True and np.isclose(r.modes[0].sigma, 0.818755, rtol=1e-5)
-    assert r.modes[0].residual < 1e-10 and r.proofs[0]["test"] == "certified-mode"
-    assert r.proofs[0]["sigma_window"] is None and r.proofs[0]["eigen_solves"] <= divergence.FIRST_SEARCH
-    shift = float(r.evidence.split("search from σ = ")[1].split(":")[0])
+    proof = r.proofs[0]
+    assert r.modes[0].residual < 1e-10 and proof.test == "certified-mode"
+    assert proof.sigma_window is None and 1 <= proof.eigen_solves <= search.FIRST_SEARCH
+    assert proof.supports_visited >= 1 and proof.margin is None and proof.stable_friction is None
+    with pencil(scene) as pen:
+        shift = sigma_window.probe_top(pen.A, pen.B).shift
     assert shift > r.modes[0].sigma
+    assert r.evidence == proof.statement == (
+        f"search from σ = {shift:.6g}: a certified divergence mode after {proof.eigen_solves} eigen-solve(s), "
+        f"{proof.supports_visited} support(s)")
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():
     """nx = 60, slip−, μ = 1.2 (below μ_c ≈ 1.46): sym(−A) is indefinite; the condensed
     tests prove every σ ≥ 0 free of modes, with no σ-window certified."""
     r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
-    assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
-    assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "σ_max" not in r.evidence
+    proof = r.proofs[0]
+    assert r.divergence is False and proof.test == "condensed-windows"
+    assert proof.sigma_window == (0.0, math.inf) and proof.margin > 0
+    assert r.evidence == proof.statement and r.evidence.endswith("(a proof)")
 
 
-@pytest.mark.parametrize("reach, divergence_verdict", [(50.0, False), (1e-3, None)])
-def test_a_proof_stopped_short_of_infinity_is_completed_by_the_sigma_window(monkeypatch, reach, divergence_verdict):
+@pytest.mark.parametrize("reach, stable", [(50.0, True), (1e-3, None)])
+def test_a_proof_stopped_short_of_infinity_is_completed_by_the_sigma_window(reach, stable):
     """Where the condensed proof covers only [0, c] (here: the real proof on [0, c], reported
     as stopped there), the certified σ_max of (sym A, sym B) completes it when σ_max ≤ c —
-    and only then: with c below σ_max the verdict stays undecided, saying what was proved."""
-    from meicp.contact.divergence_proof import DivergenceProof
-
-    real = divergence.prove_no_divergence
+    and only then: with c below σ_max the verdict stays undecided, saying what was proved.
+    The sentence of the σ-window's proof is checked here."""
 
     def stopped_at_reach(comm, pen, sigma_max, **kw):
-        p = real(comm, pen, reach, **kw)
+        p = prove_no_divergence(comm, pen, reach, **kw)
         assert p.proved and p.window == (0.0, reach)
-        return DivergenceProof(False, "", f"window [{reach}, inf] not certified", -1.0, p.samples, p.window)
+        return CondensedProof(False, "", f"window [{reach}, inf] not certified", -1.0, p.samples, p.window)
 
-    monkeypatch.setattr(divergence, "prove_no_divergence", stopped_at_reach)
-    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
-    assert r.divergence is divergence_verdict
-    if divergence_verdict is False:
-        assert r.proofs[0]["test"] == "rayleigh-window+condensed-windows" and "σ_max" in r.evidence
-        assert 0 < r.proofs[0]["sigma_window"][1] <= reach
+    v = _verdict(_scene(60, (2, 2), "slip-", 1.2), prove=stopped_at_reach)
+    assert v.stable is stable
+    if stable:
+        assert v.proof.test == "rayleigh-window+condensed-windows" and v.proof.margin == -1.0
+        sigma_max = v.proof.sigma_window[1]
+        assert v.proof.sigma_window[0] == 0.0 and 0 < sigma_max <= reach
+        assert v.evidence == v.proof.statement == (
+            f"no solution above σ_max = {sigma_max:.6g} (Rayleigh bound, LDLᵀ inertia) and none in "
+            f"[0, {reach:.6g}] by the condensed windows (window [{reach}, inf] not certified) (a proof)")
     else:
-        assert r.proofs[0]["sigma_window"] == (0.0, reach) and "undecided" in r.evidence
+        assert v.proof.test == "" and v.proof.sigma_window == (0.0, reach) and v.modes == []
+        assert v.proof.stable_friction_scale is not None and v.proof.margin is None
 
 
-def test_without_a_certified_window_the_condensed_proof_covers_every_sigma(monkeypatch):
+def test_without_a_certified_window_the_condensed_proof_covers_every_sigma():
     """When the top of (sym A, sym B) sits in the cluster of slow vibrations (a tall lattice:
     Lanczos returns an unconverged Ritz value below it) no σ_max is certified; the condensed
     proof then covers [0, ∞) — and proves nothing where a mode exists (the search from 0
-    misses the mode without the window's top: undecided, never stable)."""
-    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B, **kw: (-1.0, False, 60))
-    r = meicp.analyze(_scene(60, (2, 2), "slip-", 1.2), flutter=False)
-    assert r.divergence is False and r.proofs[0]["test"] == "condensed-windows"
-    assert r.proofs[0]["sigma_window"] == (0.0, float("inf")) and "[0, inf]" in r.evidence
-    assert r.to_dict()["proofs"][0]["sigma_window"] == [0.0, "inf"]  # JSON (and results.h5): was [0.0, null]
-    r = meicp.analyze(_scene(60, (2, 2), "slip-", 3.0), flutter=False)
-    assert r.divergence is not False and r.stable is not True
+    misses the mode without the window's top: undecided, never stable).  The condensed
+    windows' sentence (:mod:`meicp.contact.divergence.condensed`) is checked here."""
+    v = _verdict(_scene(60, (2, 2), "slip-", 1.2), estimate_top=_stalled)
+    assert v.stable is True and v.proof.test == "condensed-windows"
+    assert v.proof.sigma_window == (0.0, math.inf) and v.evidence == v.proof.statement
+    assert v.evidence.startswith("G(σ) ∈ R₀ on every window of [0, inf] (")
+    # JSON (and results.h5): was [0.0, null]
+    assert InstabilityResult(proofs=[v.proof]).to_dict()["proofs"][0]["sigma_window"] == [0.0, "inf"]
+    v = _verdict(_scene(60, (2, 2), "slip-", 3.0), estimate_top=_stalled)
+    assert v.stable is not True
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -105,41 +141,45 @@ def test_the_large_problem_path_never_contradicts_enumeration(nx, lower, upper, 
     elif window.divergence is False:
         assert truth.divergence is False, window.evidence
     else:
-        assert "undecided" in window.evidence
+        assert window.proofs[0].test == "" and window.proofs[0].stable_friction_scale is not None
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                  HealthCheck.function_scoped_fixture])
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(nx=st.integers(4, 9), lower=st.integers(1, 3), upper=st.integers(1, 3),
        state=st.sampled_from(["slip+", "slip-"]), shear=st.sampled_from([-0.5, 0.5]),
        mu=st.floats(0.05, 6.0))
-def test_without_a_window_the_proof_on_every_sigma_never_contradicts_enumeration(monkeypatch, nx, lower, upper,
-                                                                                 state, shear, mu):
+def test_without_a_window_the_proof_on_every_sigma_never_contradicts_enumeration(nx, lower, upper, state, shear,
+                                                                                 mu):
     """Lanczos made to stall (no σ_max certified): the condensed proof on [0, ∞) and the
     search from 0 never claim what enumeration contradicts."""
-    monkeypatch.setattr(divergence, "rayleigh_estimate", lambda A, B, **kw: (-1.0, False, 60))
     scene = _scene(nx, (lower, upper), state, mu, shear)
-    truth = meicp.analyze(scene, method="enumerate", flutter=False)
-    window = meicp.analyze(scene, method="active-set", flutter=False)
-    if window.divergence is not None:
-        assert window.divergence == truth.divergence, window.evidence
+    truth = _verdict(scene, method="enumerate")
+    window = _verdict(scene, estimate_top=_stalled)
+    assert truth.stable is not None
+    if window.stable is not None:
+        assert window.stable == truth.stable, window.evidence
 
 
 @pytest.mark.parametrize("mu", [0.5, 3.0])
 def test_a_frictional_interface_past_16_contacts_gets_a_verdict_not_an_error(mu):
     """80 sliding interface pairs: at μ = 0.5 the Rayleigh bound proves stability; at μ = 3
     sym(B) is indefinite (no Rayleigh quotient, and Lanczos on (sym A, sym B) breaks down —
-    it used to end in a PETSc error): undecided, with that reason."""
+    it used to end in a PETSc error): undecided, with that reason.  The undecided sentence
+    is checked here."""
     from meicp.io.scene import loads_scene
 
     text = (ROOT / "data" / "scenes" / "frictional_interface.toml").read_text()
     text = text.replace("nx = 10", "nx = 80").replace("friction = 0.5", f"friction = {mu}")
     r = meicp.analyze(loads_scene(text), flutter=False)
+    proof = r.proofs[0]
     if mu == 0.5:
-        assert r.divergence is False and r.proofs[0]["test"] == "rayleigh-inertia"
+        assert r.divergence is False and proof.test == "rayleigh-inertia"
     else:
-        assert r.divergence is None and "B is not proved positive definite" in r.evidence
-        assert "σ-window" in r.evidence
+        assert r.divergence is None and proof.test == "" and r.evidence == proof.statement
+        assert proof.stable_friction_scale is not None and proof.eigen_solves >= 1
+        assert r.evidence.startswith("undecided: Rayleigh bound at 0: B is not proved positive definite")
+        assert "; no σ-window (λ_max(sym A, sym B) not estimated); condensed test: " in r.evidence
+        assert f"over {proof.supports_visited} support(s) found no mode ({r.eicp[0].status})" in r.evidence
 
 
 @pytest.mark.parametrize("top", ["fixed", "free"])
@@ -169,18 +209,17 @@ def test_an_undecided_verdict_states_the_friction_up_to_which_stability_is_prove
     r = at(3.0)
     assert r.divergence is None
     proof = r.proofs[0]
-    mu_r = proof["stable_friction"]["lower"]
-    assert 0.5 <= mu_r < 3.0 and proof["stable_friction_scale"] == pytest.approx(mu_r / 3.0)
-    assert f"μ ≤ {mu_r:.4g} (lower)" in r.evidence
+    mu_r = proof.stable_friction["lower"]
+    assert 0.5 <= mu_r < 3.0 and proof.stable_friction_scale == pytest.approx(mu_r / 3.0)
+    assert f"μ ≤ {mu_r:.4g} (lower)" in r.evidence  # the friction range's own sentence, in the verdict's
     below, above = at(0.999 * mu_r), at(1.2 * mu_r)
-    assert below.divergence is False and below.proofs[0]["test"] == "rayleigh-inertia"
-    assert above.proofs[0]["test"] != "rayleigh-inertia"
+    assert below.divergence is False and below.proofs[0].test == "rayleigh-inertia"
+    assert above.proofs[0].test != "rayleigh-inertia"
 
 
 def test_a_floating_lattice_has_no_friction_range():
     """Without friction the Rayleigh bound cannot hold on a lattice free to move as a whole."""
     from meicp.contact.friction_range import proved_friction_range
-    from meicp.contact.problem import pencil
 
     with pencil(two_layer_scene(20, (2, 2), mu=1.0, states="slip+", top="free")) as pen:
         reach = proved_friction_range(pen)
@@ -192,7 +231,7 @@ def test_the_friction_range_on_300_sliding_base_contacts():
     μ it names: the Rayleigh bound proves stability just below it, not 20 % above."""
     from meicp.contact.friction_range import proved_friction_range
     from meicp.contact.problem import pencil
-    from meicp.petsc.inertia import rayleigh_bound
+    from meicp.contact.rayleigh import rayleigh_bound
 
     with pencil(_scene(300, (4, 4), "slip+", 3.0)) as pen:
         reach = proved_friction_range(pen)
@@ -205,22 +244,43 @@ def test_the_friction_range_on_300_sliding_base_contacts():
 
 @pytest.mark.parametrize("state, mu, mode", [("slip+", 1.0, False), ("slip-", 3.0, True)])
 def test_the_first_search_gives_up_only_where_no_ritz_value_shows_above_zero(state, mu, mode):
-    """The first search's stopping test (divergence.FIRST_GIVE_UP): on a stable lattice every
+    """The first search's stopping test (search.FIRST_GIVE_UP): on a stable lattice every
     Ritz value sits in the slow vibrations below 0 and the eigen-solve stops after the first
     restart (the stopping test reads that restart's Ritz values) instead of its six; where a
     mode exists it shows above 0 at once and is found."""
-    from meicp.contact.problem import pencil
-    from meicp.petsc.window import rayleigh_estimate
-
     with pencil(_scene(200, (20, 20), state, mu)) as pen:  # tall enough for a cluster of slow vibrations
-        theta = rayleigh_estimate(pen.A, pen.B, max_it=divergence.PROBE_RESTARTS)[0]
+        theta = sigma_window.ritz_estimate(pen.A, pen.B, max_it=sigma_window.PROBE_RESTARTS)[0]
         kw = dict(J=pen.maps.J, method="active-set", lam_min=0.0, target=1.001 * theta, nev=1, max_iter=1,
-                  options={"eps_max_it": divergence.FIRST_EPS_MAX_IT})
-        eager = meicp.solve_eicp(pen.A, pen.B, give_up_after=divergence.FIRST_GIVE_UP, **kw)
+                  options={"eps_max_it": search.FIRST_EPS_MAX_IT})
+        eager = meicp.solve_eicp(pen.A, pen.B, give_up_after=search.FIRST_GIVE_UP, **kw)
         patient = meicp.solve_eicp(pen.A, pen.B, **kw)
     assert bool(eager.solutions) is mode and bool(patient.solutions) is mode
     if mode:
         assert eager.coverage["gave_up"] == 0 and np.isclose(eager.solutions[0].lam, patient.solutions[0].lam)
     else:
-        assert eager.coverage["gave_up"] == 1 and eager.coverage["eps_iterations"] == divergence.FIRST_GIVE_UP
-        assert patient.coverage["eps_iterations"] == divergence.FIRST_EPS_MAX_IT
+        assert eager.coverage["gave_up"] == 1 and eager.coverage["eps_iterations"] == search.FIRST_GIVE_UP
+        assert patient.coverage["eps_iterations"] == search.FIRST_EPS_MAX_IT
+
+
+def test_a_proof_is_written_with_the_keys_results_files_have_always_had():
+    """results.json / results.h5 keep their keys (and their order) for each kind of proof."""
+    window = DivergenceProof("condensed-windows", "s", 7, (0.0, math.inf), 3, margin=0.5)
+    assert list(window.to_dict()) == ["test", "statement", "sigma_window", "supports_visited", "eigen_solves",
+                                      "margin"]
+    undecided = DivergenceProof("", "s", 7, None, 3, stable_friction_scale=0.5, stable_friction={"base": 1.0})
+    assert undecided.to_dict() == {"test": "", "statement": "s", "sigma_window": None, "supports_visited": 7,
+                                   "eigen_solves": 3, "stable_friction_scale": 0.5, "stable_friction": {"base": 1.0}}
+    assert list(DivergenceProof("enumerate", "s", 16).to_dict()) == ["test", "supports_visited", "statement"]
+    assert DivergenceProof("all-held", "s").to_dict() == {"test": "all-held", "statement": "s"}
+
+
+def test_why_no_sigma_max_was_certified():
+    """The reasons an undecided verdict gives for having no σ_max, where they are made."""
+    top = sigma_window.TopEstimate(False, math.nan, False, 1.0, False)
+    assert sigma_window.no_sigma_max(top) == "no σ-window (λ_max(sym A, sym B) not estimated)"
+    stalled = sigma_window.TopEstimate(True, -1e-5, False, 1.0, False)
+    assert sigma_window.no_sigma_max(stalled) == (
+        f"no σ_max: no Ritz value of (sym A, sym B) above 0 in {sigma_window.PROBE_RESTARTS} Lanczos restarts "
+        "(largest -1e-05; the top lies among the slow vibrations, where Lanczos stalls)")
+    missed = sigma_window.TopEstimate(True, 2.5, True, 1.0, True)
+    assert sigma_window.no_sigma_max(missed) == "no σ_max certified above the estimate 2.5 of λ_max(sym A, sym B)"

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 import meicp
 from meicp.core.errors import ProblemError, SolverNotFound
 from meicp.eicp.problem import EiCPProblem, certify_pair
-from meicp.io.problem_files import write_hdf5_problem
 
 from .conftest import meicp_cmd, run
+from .helpers import write_hdf5_problem
 
 
 def brute_force(A, B, J):

@@ -1,5 +1,5 @@
 """Two independent EiCP methods: SPG on the Rayleigh quotient (meicp.eicp.rayleigh) and
-semismooth Newton on PETSc SNES VI (meicp.eicp.semismooth).
+semismooth Newton on PETSc SNES VI (meicp.petsc.eicp_semismooth).
 
 Oracles (docs/design.md §4.4), computed here without the library:
 - ``brute_force``: every nonempty support S ⊆ J, the reduced pencil on R = F ∪ S by
@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from meicp.core.errors import ProblemError
 from meicp.eicp.problem import EiCPProblem
 from meicp.eicp.rayleigh import project_simplex, rayleigh
-from meicp.eicp.semismooth import semismooth
+from meicp.petsc.eicp_semismooth import semismooth
 
 from .conftest import DATA
 

@@ -93,12 +93,10 @@ def test_readme_python_example(monkeypatch):
 
 
 def test_the_benchmarks_two_layer_scene_is_the_shipped_one():
-    """scripts/bench_scenes.py builds data/scenes/two_layers.toml (the failure map's scene)."""
+    """meicp.examples.two_layer_scene builds data/scenes/two_layers.toml (the failure map's scene)."""
     import dataclasses
-    import sys
 
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from bench_scenes import two_layer_scene
+    from meicp.examples import two_layer_scene
 
     shipped = meicp.load_scene(SCENES / "two_layers.toml")
     built = two_layer_scene(5, (2, 2), mu=3.0, load=(0.06, -0.1), petsc={"eps_tol": 1e-10},

@@ -5,31 +5,26 @@ the explicit "no divergence mode" — never a wrong, certified-looking answer.
 Each test builds one point of the failure map, checks it against an independent
 reference (analytic, or brute force with scipy.linalg.eig / numpy.linalg.solve), and
 pins what the method reports there.  The problems and the brute-force references are the
-failure map's own (imported from scripts/bench_failure.py).  Serial and fast.
+failure map's own (:mod:`meicp.examples.failure_map`).  Serial and fast.
 """
 
 from __future__ import annotations
 
 import itertools
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+import numpy as np
+import pytest
+import scipy.linalg as sla
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import scipy.linalg as sla  # noqa: E402
-
-import bench_failure as fm  # noqa: E402  (the failure map's problems and references)
-import meicp  # noqa: E402
-from meicp.core.errors import ProblemError  # noqa: E402
-
-MU_C = fm.MU_C  # two_layers.toml, every base node slip+
+import meicp
+from meicp.core.errors import ProblemError
+from meicp.examples import failure_map as fm
+from meicp.examples.failure_map import MU_C  # two_layers.toml, every base node slip+
 
 
 def _sigmas(A, B, J):
     """Every real MEiCP σ ≥ 0 of the failure map's brute-force reference, largest first."""
-    return sorted((lam for lam, _ in fm.ref_eicp(A, B, J, lam_min=0.0)[0]), reverse=True)
+    return sorted((lam for lam, _ in fm.all_eicp_solutions(A, B, J, lam_min=0.0)[0]), reverse=True)
 
 
 # ----------------------------------------------------------------------------- flutter
@@ -67,15 +62,15 @@ def test_flutter_rayleigh_refuses_nonsymmetric(flutter_pencil):
 
 def test_flutter_lattice_analyze_says_no_divergence_mode():
     """Sheared lattice with stick/slip+/stick states at μ = 4: complex σ, no real σ ≥ 0."""
-    sc = fm.scene(mu=4.0, shear=0.5, states='["stick", "slip+", "slip+", "slip+", "stick"]')
-    A, B, J = fm.pencil(sc)
+    sc = fm.two_layers(mu=4.0, shear=0.5, states='["stick", "slip+", "slip+", "slip+", "stick"]')
+    A, B, J = fm.dense_pencil(sc)
     assert np.abs(sla.eigvals(A, B).imag).max() > 0.1
     assert _sigmas(A, B, J) == []
     r = meicp.analyze(sc)  # enumeration: a proof that no divergence mode exists
     assert r.divergence is False and r.modes == [] and "no solution with σ ≥ 0" in r.evidence
     assert r.flutter is True and r.stable is False  # the complex σ: flutter of steady sliding (issue 15)
     r = meicp.analyze(sc, method="active-set")  # the large-problem path agrees, with its own proof
-    assert r.divergence is False and r.modes == [] and r.proofs[0]["test"] == "condensed-windows"
+    assert r.divergence is False and r.modes == [] and r.proofs[0].test == "condensed-windows"
 
 
 # ----------------------------------------------------------------------------- μ across μ_c
@@ -85,23 +80,23 @@ def test_just_below_mu_c_no_negative_sigma_reported_as_mode(method):
     """Regression (failure map): at μ = μ_c(1 − 1e-10) the largest σ is −5e-11; enumerate,
     active-set and analyze used to report it as a divergence mode (window slack tol = 1e-10
     on λ), with analyze saying "unstable".  Now λ < lam_min is never a solution."""
-    sc = fm.scene(mu=MU_C * (1 - 1e-9))
-    A, B, J = fm.pencil(sc)
+    sc = fm.two_layers(mu=MU_C * (1 - 1e-9))
+    A, B, J = fm.dense_pencil(sc)
     assert _sigmas(A, B, J) == []
     res = meicp.solve_eicp(A, B, J=J, method=method, lam_min=0.0)
     assert res.solutions == [] and not res.success
     r = meicp.analyze(sc)
     assert r.divergence is False and r.modes == []
-    sc = fm.scene(mu=MU_C * (1 + 1e-6))  # just above: a genuine σ ≈ 5e-7 > 0 mode
-    res = meicp.solve_eicp(*fm.pencil(sc)[:2], J=J, method=method, lam_min=0.0)
+    sc = fm.two_layers(mu=MU_C * (1 + 1e-6))  # just above: a genuine σ ≈ 5e-7 > 0 mode
+    res = meicp.solve_eicp(*fm.dense_pencil(sc)[:2], J=J, method=method, lam_min=0.0)
     assert res.success and 0 < res.lam < 1e-5
 
 
 def test_critical_friction_matches_brute_force_bisection():
-    mu_c = meicp.critical_friction(fm.scene())
+    mu_c = meicp.critical_friction(fm.two_layers())
     assert mu_c == pytest.approx(MU_C, rel=1e-8)
     for mu, exists in ((mu_c * (1 - 1e-6), False), (mu_c * (1 + 1e-6), True)):
-        A, B, J = fm.pencil(fm.scene(mu=mu))
+        A, B, J = fm.dense_pencil(fm.two_layers(mu=mu))
         assert bool(_sigmas(A, B, J)) is exists
 
 
@@ -110,7 +105,7 @@ def test_critical_friction_matches_brute_force_bisection():
 def test_contrast_1e6_certified_or_reported():
     """k_B/k_A = 10^6: cond(A) ≈ 1.5e7.  Certified answers match the brute force to 1e-10;
     semismooth from its default start does not converge and says so."""
-    A, B, J = fm.pencil(fm.scene(kB=1e6))
+    A, B, J = fm.dense_pencil(fm.two_layers(kB=1e6))
     ref = _sigmas(A, B, J)
     assert len(ref) == 1
     for method in ("enumerate", "active-set", "semismooth"):
@@ -141,7 +136,7 @@ def test_repeated_eigenvalues_enumerate_finds_every_support():
 def test_mirror_twins_double_sigma():
     """Two identical uncoupled lattices: every σ is double and the solutions form a cone;
     every method returns σ = 0.3290549424 and nothing else."""
-    A1, B1, J1 = fm.pencil(fm.scene())
+    A1, B1, J1 = fm.dense_pencil(fm.two_layers())
     A, B = sla.block_diag(A1, A1), sla.block_diag(B1, B1)
     J = np.concatenate([J1, J1 + A1.shape[0]])
     for method in ("enumerate", "active-set", "semismooth"):
@@ -157,14 +152,14 @@ def infeasible_slip_lcp():
     M, q = fm.slip_lcp(3.0)
     c = meicp.classify(M)
     assert c.p_matrix is False and c.q_matrix is False  # classes predict the loss
-    assert fm.ref_lcp(M, q)[0] == []  # and there is indeed no solution
+    assert fm.all_lcp_solutions(M, q)[0] == []  # and there is indeed no solution
     return M, q
 
 
 def test_slip_lcp_below_mu_c_is_p_and_unique():
     M, q = fm.slip_lcp(1.0)
     assert meicp.classify(M).p_matrix is True
-    (x,) = fm.ref_lcp(M, q)[0]
+    (x,) = fm.all_lcp_solutions(M, q)[0]
     for method in ("lemke", "enumerate", "newton", "auto"):
         res = meicp.solve_lcp(M, q, method=method)
         assert res.success and np.allclose(res.x, x, atol=1e-9), method
@@ -196,7 +191,7 @@ def test_pgs_symmetric_non_p_without_solution_fails():
     iterate, for inspection), never a solution."""
     M = np.array([[1.0, -2.0], [-2.0, 1.0]])
     q = np.array([-1.0, -1.0])
-    assert fm.ref_lcp(M, q)[0] == []
+    assert fm.all_lcp_solutions(M, q)[0] == []
     res = meicp.solve_lcp(M, q, method="pgs")
     assert res.status == "diverged" and not res.success and res.iterations < 1000
     assert meicp.solve_lcp(M, q, method="enumerate").status == "infeasible"
@@ -207,7 +202,7 @@ def test_large_mu_lift_load_two_solutions():
     single-solution methods return one of them."""
     M, _ = fm.slip_lcp(3.0)
     q = np.ones(M.shape[0])
-    ref = fm.ref_lcp(M, q)[0]
+    ref = fm.all_lcp_solutions(M, q)[0]
     assert len(ref) == 2
     res = meicp.solve_lcp(M, q, method="enumerate")
     assert res.success and len(res.solutions) == 2
@@ -229,8 +224,8 @@ def test_nearly_coinciding_sigmas_active_set_certified_or_certificate_failed():
     """Twins at μ = 3 and 3(1 + 1e-6): two σ 1e-6 apart.  The shift-and-invert solve mixes
     the two eigenvectors; active-set then reports certificate_failed (residual 3.5e-10 >
     1e-10) rather than the mixed vector — never a wrong σ.  enumerate finds both."""
-    A1, B1, J1 = fm.pencil(fm.scene())
-    A2, B2, _ = fm.pencil(fm.scene(mu=3.0 * (1 + 1e-6)))
+    A1, B1, J1 = fm.dense_pencil(fm.two_layers())
+    A2, B2, _ = fm.dense_pencil(fm.two_layers(mu=3.0 * (1 + 1e-6)))
     A, B = sla.block_diag(A1, A2), sla.block_diag(B1, B2)
     J = np.concatenate([J1, J1 + A1.shape[0]])
     ref = _sigmas(A1, B1, J1) + _sigmas(A2, B2, J1)

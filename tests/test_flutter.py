@@ -17,7 +17,7 @@ from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
 from meicp.core.errors import ProblemError
 from meicp.io.scene import scene_from_dict
-from meicp.petsc.mat import to_dense
+from meicp.core.matrix import to_dense
 
 from .conftest import ROOT, meicp_cmd, run
 
@@ -151,7 +151,7 @@ def _block_pencil(eps: float):
 
 def test_clear_pair_is_flutter():
     r = fl.dense_flutter(*_block_pencil(1e-3))
-    assert r.flutter is True and len(r.modes) == 1 and abs(r.modes[0][0] - (-5.55 + 1e-3j)) < 1e-12
+    assert r.flutter is True and len(r.modes) == 1 and abs(r.modes[0].sigma - (-5.55 + 1e-3j)) < 1e-12
 
 
 @pytest.mark.parametrize("eps", [1e-15, 1e-17, 0.0])
@@ -204,13 +204,13 @@ def test_large_scale_search_forced_on_a_small_scene():
     got, ref = _forced_search(None)
     assert ref.flutter is True and ref.complete
     assert got.flutter is True and not got.complete and "not a proof" in got.evidence
-    (s, x, res, *_), (s_ref, x_ref, *_) = got.modes[0], ref.modes[0]
-    g, f = growth_frequency(s)
-    g_ref, f_ref = growth_frequency(s_ref)
-    assert rel(g, g_ref) <= 1e-8 and rel(f, f_ref) <= 1e-8 and res <= fl.RESIDUAL_TOL
-    assert abs(abs(np.vdot(x, x_ref)) - 1) < 1e-6
+    mode, mode_ref = got.modes[0], ref.modes[0]
+    g, f = growth_frequency(mode.sigma)
+    g_ref, f_ref = growth_frequency(mode_ref.sigma)
+    assert rel(g, g_ref) <= 1e-8 and rel(f, f_ref) <= 1e-8 and mode.residual <= fl.RESIDUAL_TOL
+    assert abs(abs(np.vdot(mode.x, mode_ref.x)) - 1) < 1e-6
     # every mode the search certified is one of QZ's
-    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
 
 
 def test_search_without_a_mode_never_says_no_flutter():
@@ -242,8 +242,8 @@ def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeyp
     assert len(calls) == 1 and none.flutter is None and not none.modes
     assert got.counts["moved"] == 1 and "moved off it" in got.evidence
     assert got.flutter is True and got.modes
-    assert all(m[4] == f"shift-invert at τ = {fl.off_cluster(tau, 0):.6g}" for m in got.modes)
-    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert all(m.found_by == f"shift-invert at τ = {fl.off_cluster(tau, 0):.6g}" for m in got.modes)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
     assert fl.off_cluster(tau, 0).imag > tau.imag and fl.off_cluster(tau, 1).imag > fl.off_cluster(tau, 0).imag
 
 
@@ -275,12 +275,12 @@ def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity,
         A, B = pen.A[:n, :n].tocsr(), pen.B[:n, :n].tocsr()
     assert n % 2 == parity
     ref = fl.dense_flutter(A, B)
-    tau = ref.modes[0][0] + 0.01j
+    tau = ref.modes[0].sigma + 0.01j
     got = fl.search_flutter(A, B, [tau], nev=2, ncv=12, low_rank=low_rank,
                             options={"real_form": True} if form == "real" else None)
     assert got.flutter is True and got.modes
-    assert all(m[2] <= fl.RESIDUAL_TOL for m in got.modes)
-    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert all(m.residual <= fl.RESIDUAL_TOL for m in got.modes)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
 
 
 def test_large_pencils_start_above_the_cluster(monkeypatch):
@@ -308,7 +308,7 @@ def test_large_pencils_start_above_the_cluster(monkeypatch):
     assert kw["ncv"] == fl.OFF_CLUSTER_NCV and kw["low_rank"] == fl.LOW_RANK_TOL
     assert "moved up off its cluster before the first solve" in got.evidence
     assert got.flutter is True and got.modes
-    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
 
 
 @pytest.mark.mpi(min_size=2)
@@ -322,8 +322,8 @@ def test_same_flutter_modes_on_two_ranks(comm):
         assert abs(a.sigma - b.sigma) <= 1e-12 * abs(a.sigma) and abs(abs(np.vdot(a.x, b.x)) - 1) < 1e-8
     got, ref = _forced_search(comm)
     serial, _ = _forced_search(MPI.COMM_SELF)
-    assert abs(got.modes[0][0] - serial.modes[0][0]) <= 1e-10 * abs(serial.modes[0][0])
-    assert rel(growth_frequency(got.modes[0][0])[0], growth_frequency(ref.modes[0][0])[0]) <= 1e-8
+    assert abs(got.modes[0].sigma - serial.modes[0].sigma) <= 1e-10 * abs(serial.modes[0].sigma)
+    assert rel(growth_frequency(got.modes[0].sigma)[0], growth_frequency(ref.modes[0].sigma)[0]) <= 1e-8
 
 
 def test_solve_writes_and_prints_flutter(cli, tmp_path):
@@ -376,7 +376,7 @@ def test_search_without_a_proxy_on_a_frictional_interface():
         got = fl.pencil_flutter(pen, scene, dense_max=0)
         ref = fl.pencil_flutter(pen, scene)
     assert "λ-line" in got.evidence and got.flutter in (True, None) and ref.flutter is True
-    assert all(min(abs(m[0] - r[0]) for r in ref.modes) <= 1e-8 * abs(m[0]) for m in got.modes)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
 
 
 @pytest.mark.parametrize("units", [1e-7, 1e7, 1e12])
@@ -391,8 +391,8 @@ def test_dense_verdict_does_not_depend_on_the_units(units):
     got = fl.dense_flutter(units * A, B / units)
     assert ref.flutter is True and got.flutter is True
     assert got.counts == ref.counts and len(got.modes) == len(ref.modes)
-    for (s_got, *_), (s_ref, *_) in zip(got.modes, ref.modes):
-        assert abs(s_got / units**2 - s_ref) <= 1e-8 * abs(s_ref)
+    for m_got, m_ref in zip(got.modes, ref.modes):
+        assert abs(m_got.sigma / units**2 - m_ref.sigma) <= 1e-8 * abs(m_ref.sigma)
 
 
 def test_the_skew_bound_is_its_formula_and_bounds_every_imaginary_part():
@@ -422,7 +422,7 @@ def test_complex_and_real_form_factors_return_the_same_pairs():
     scene = lattice(16, (3, 3), 2.0)
     with pencil(scene) as pen:
         A_s, B_s = pen.A.tocsr(), pen.B.tocsr()
-    tau = fl.dense_flutter(A_s, B_s).modes[0][0] + 0.01j
+    tau = fl.dense_flutter(A_s, B_s).modes[0].sigma + 0.01j
     A, B = mat_from_scipy(None, A_s), mat_from_scipy(None, B_s)
     try:
         with SlidingPencilOps(A, B) as ops:

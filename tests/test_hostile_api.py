@@ -25,7 +25,7 @@ import meicp
 from meicp.core.errors import ProblemError
 from meicp.eicp.problem import EiCPProblem, certify_pair
 from meicp.io import problem_files
-from meicp.io.problem_files import read_problem, write_hdf5_problem
+from meicp.io.problem_files import read_problem
 from meicp.lcp.problem import LCPProblem
 
 from .conftest import ROOT, meicp_cmd, run

@@ -57,7 +57,7 @@ def test_single_node_oracle(shear):
 
 def test_single_spring_is_cot_theta():
     """The k_tt/|k_tn| ratio of one bond at angle θ is cot θ: check on the element matrix."""
-    from meicp.lattice.assembly import bond_stiffness
+    from .helpers import bond_stiffness
 
     for theta in (0.3, 0.9, 1.2):
         K = bond_stiffness([[0, 0], [np.cos(theta), np.sin(theta)]], [[0, 1]], 2.0).toarray()
@@ -295,10 +295,9 @@ def test_condensed_critical_friction_beyond_the_former_limit():
     mu = critical_friction(sc)
     assert 1.0 < mu < 3.0
     # the smallest certified σ = 0 solution: just above it analyze finds a mode
-    import dataclasses
+    from meicp.examples import with_friction
 
-    above = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, friction=mu * (1 + 1e-4)))
-    below = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, friction=mu * (1 - 1e-4)))
+    above, below = with_friction(sc, mu * (1 + 1e-4)), with_friction(sc, mu * (1 - 1e-4))
     assert analyze(above, method="active-set").stable is False
     assert analyze(below, method="active-set").divergence is not True
 

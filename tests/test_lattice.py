@@ -23,12 +23,13 @@ import scipy.linalg
 
 from meicp.core.errors import ProblemError
 from meicp.io.scene import load_scene, scene_from_dict
-from meicp.lattice.assembly import assemble_scipy, bond_stiffness
+from meicp.lattice.assembly import assemble_scipy
 from meicp.petsc.assembly import assemble
 from meicp.scene import Scene
 from meicp.lattice.model import LatticeModel
 
 from .conftest import ROOT
+from .helpers import bond_stiffness
 
 SCENES = ROOT / "data" / "scenes"
 

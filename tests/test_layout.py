@@ -1,8 +1,10 @@
 """The package's structure, read from its source: imports go one way between the rooms of the
 README's layout table, no import circles, no function-level imports except of optional
-heavy dependencies, PETSc/SLEPc imported only inside ``meicp.petsc``."""
+heavy dependencies, PETSc/SLEPc named only inside ``meicp.petsc``."""
 
 import ast
+import io
+import tokenize
 
 import pytest
 
@@ -13,24 +15,34 @@ SRC = ROOT / "src"
 #: (PETSc/SLEPc initialise with the command line's options, mpi4py starts MPI), or they are
 #: needed by one feature only (HDF5 files, pictures, the Siconos peer)
 LAZY = {"petsc4py", "slepc4py", "mpi4py", "h5py", "matplotlib", "siconos"}
-#: the rooms, and those each may import (besides itself); ``meicp`` is the package's
-#: ``__init__`` (its version), ``api`` the public entry points that also read scene files
+#: the rooms, and those each may import (besides itself), lowest first: ``_version`` is the
+#: package's version (``io``, ``info`` and ``cli`` report it: no arrow back up to the root),
+#: ``meicp`` the package's ``__init__``, ``api`` the public entry points that also read scene
+#: files.  ``lcp`` and ``eicp`` know nothing of PETSc: they dispatch on matrix kinds
+#: (``core.matrix``) and name their methods in a registry, and ``petsc`` builds on them —
+#: it registers the PETSc Mat's operations and the PETSc-based methods (as DOLFINx's
+#: ``fem/petsc.py`` builds on ``fem/assemble.py``)
 MAY_IMPORT = {
+    "_version": set(),
     "core": set(),
     "scene": {"core"},
     "lattice": {"core", "scene"},
-    "petsc": {"core", "scene", "lattice"},
-    "lcp": {"core", "petsc"},
-    "eicp": {"core", "petsc", "lcp"},
-    "contact": {"core", "scene", "lattice", "petsc", "lcp", "eicp"},
+    "lcp": {"core"},
+    "eicp": {"core", "lcp"},
+    "petsc": {"core", "scene", "lattice", "lcp", "eicp"},
+    "contact": {"core", "scene", "lattice", "lcp", "eicp", "petsc"},
     "plotting": {"core", "scene", "lattice"},
-    "info": {"meicp", "petsc"},
-    "io": {"meicp", "core", "scene", "lattice", "petsc", "plotting", "info"},
+    "info": {"_version", "petsc"},
+    "io": {"_version", "core", "scene", "lattice", "petsc", "plotting", "info"},
     "api": {"core", "scene", "lattice", "petsc", "contact", "io"},
-    "cli": {"core", "scene", "lattice", "petsc", "lcp", "eicp", "contact", "plotting", "info", "io"},
-    "meicp": {"core", "scene", "lattice", "lcp", "eicp", "contact", "io", "api"},
+    "cli": {"_version", "core", "scene", "lattice", "petsc", "lcp", "eicp", "contact", "plotting", "info", "io"},
+    "meicp": {"_version", "core", "scene", "lattice", "lcp", "eicp", "petsc", "contact", "io", "api"},
     "__main__": {"cli"},
+    "examples": {"core", "scene", "lattice", "petsc", "contact", "io", "api"},
 }
+#: names that mean PETSc or SLEPc in code: the bindings, their modules, and the loaders
+#: that import them (comments, docstrings and other strings are prose or data, not use)
+PETSC_NAMES = {"petsc4py", "slepc4py", "PETSc", "SLEPc", "import_petsc", "import_slepc"}
 
 
 def _modules() -> dict:
@@ -107,6 +119,19 @@ def test_petsc_and_slepc_are_imported_only_in_the_petsc_package():
     assert not found, found
 
 
+def test_no_petsc_name_outside_the_petsc_package():
+    """``lcp``, ``eicp`` and ``contact`` reach PETSc only through what ``meicp.petsc``
+    registers or offers: no PETSc object, exception or loader is named outside it."""
+    found = []
+    for name, (path, _) in MODULES.items():
+        if name == "meicp.petsc" or name.startswith("meicp.petsc."):
+            continue
+        tokens = tokenize.generate_tokens(io.StringIO(path.read_text(encoding="utf-8")).readline)
+        found += [f"{name}:{tok.start[0]} {tok.string}" for tok in tokens
+                  if tok.type == tokenize.NAME and tok.string in PETSC_NAMES]
+    assert not found, "\n".join(found)
+
+
 def test_no_import_circles():
     graph = _graph()
     index, low, stack, on_stack, circles = {}, {}, [], set(), []
@@ -149,3 +174,15 @@ def test_imports_go_one_way_between_rooms(room):
 
 def test_every_module_is_in_a_room():
     assert {_room(name) for name in MODULES} <= set(MAY_IMPORT)
+
+
+def test_no_test_imports_from_scripts():
+    """Tests import what they use as users do (the scene builder is :mod:`meicp.examples`);
+    scripts/ is run, never imported: no ``sys.path`` pointing into it."""
+    tests = ROOT / "tests"
+    found = [f"{path.relative_to(ROOT)}:{node.lineno}"
+             for path in sorted(tests.rglob("*.py"))
+             for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+             and ast.unparse(node.func.value) == "sys.path" and "scripts" in ast.unparse(node)]
+    assert not found, found

@@ -9,11 +9,12 @@ from hypothesis import strategies as st
 
 import meicp
 from meicp.core.errors import ProblemError, SolverNotFound
-from meicp.io.problem_files import read_problem, read_siconos_lcp, write_hdf5_problem
+from meicp.io.problem_files import read_problem, read_siconos_lcp
 from meicp.lcp.problem import LCPProblem, relative_residual
 from meicp.lcp.solve import solve_lcp
 
 from .conftest import DATA, meicp_cmd, run
+from .helpers import write_hdf5_problem
 
 SICONOS_DIR = DATA / "siconos-lcp"
 SICONOS_FILES = sorted(SICONOS_DIR.glob("*.dat"))

@@ -43,14 +43,14 @@ def test_free_heap_held_by_the_allocator_is_handed_back_before_memory_is_counted
 
 def test_memory_is_measured_again_after_reclaiming_only_when_short(monkeypatch):
     from meicp.core import machine
-    from meicp.petsc import comm as petsc_comm
+    from meicp.core import comm as core_comm
 
     calls = []
-    monkeypatch.setattr(petsc_comm, "available_memory", lambda reclaim=False: calls.append(reclaim) or
+    monkeypatch.setattr(core_comm, "available_memory", lambda reclaim=False: calls.append(reclaim) or
                         (5000 if reclaim else 1000))
-    assert petsc_comm.available_memory_on(None) == (1000, "this machine") and calls == [False]
+    assert core_comm.available_memory_on(None) == (1000, "this machine") and calls == [False]
     calls.clear()
-    assert petsc_comm.available_memory_on(None, need=800)[0] == 1000 and calls == [False]
+    assert core_comm.available_memory_on(None, need=800)[0] == 1000 and calls == [False]
     calls.clear()
-    assert petsc_comm.available_memory_on(None, need=3000)[0] == 5000 and calls == [False, True]
+    assert core_comm.available_memory_on(None, need=3000)[0] == 5000 and calls == [False, True]
     assert machine.available_memory(reclaim=True) > 0

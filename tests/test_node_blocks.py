@@ -1,6 +1,4 @@
 """Node-block padding of sparse matrices before MUMPS (meicp.lattice.node_blocks)."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +11,7 @@ from meicp.lattice.assembly import assemble_scipy
 from meicp.lattice.model import LatticeModel
 from meicp.lattice.node_blocks import NodeBlocks, node_of
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-from bench_scenes import two_layer_scene  # noqa: E402
+from meicp.examples import two_layer_scene
 
 
 def _two_layer_FF(nx=8, ny=3):

@@ -5,9 +5,8 @@ Mixed eigenvalue complementarity problems (MEiCP) and linear complementarity pro
 the README for the public API.
 """
 
-__version__ = "0.1.0"
-
-from .core.environment import require_python_stack  # noqa: E402
+from ._version import __version__
+from .core.environment import require_python_stack
 
 require_python_stack()  # NumPy, SciPy, mpi4py from Debian: a clear message if not
 
@@ -17,6 +16,10 @@ from .core import validation  # noqa: E402,F401
 from .lcp import LCPResult, solve_lcp  # noqa: E402
 from .lcp.classes import MatrixClasses, classify  # noqa: E402
 from .eicp import EiCPResult, EiCPSolution, solve_eicp  # noqa: E402
+# PETSc builds on lcp and eicp: these register the PETSc Mat as a matrix kind (core.matrix)
+# and the PETSc-based methods by name; petsc4py itself loads at the first PETSc operation
+from .petsc import eicp_active_set as _petsc_active_set, eicp_semismooth as _petsc_semismooth  # noqa: E402,F401
+from .petsc import lcp as _petsc_lcp, mat as _petsc_mat  # noqa: E402,F401
 from .lcp.game import GameValue, game_value  # noqa: E402
 from .scene import Scene  # noqa: E402
 from .io.scene import load_scene  # noqa: E402

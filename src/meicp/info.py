@@ -8,7 +8,7 @@ import sys
 import numpy
 import scipy
 
-from . import __version__
+from ._version import __version__
 from .petsc.versions import petsc_report
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from ..core.comm import available_memory_on
 from ..core.errors import ProblemError
 from ..core.log import rank0_print
 from ..io.lattice_output import write_lattice
@@ -14,7 +15,7 @@ from ..io.scene import load_scene
 from ..lattice.model import LatticeModel
 from ..lattice.size import check_size
 from ..petsc.assembly import assemble
-from ..petsc.comm import available_memory_on, index_max
+from ..petsc.comm import index_max
 from ..petsc.mat import destroying, diagonal, nonzeros
 from ..petsc.stages import stage
 from ..plotting.lattice import plot_lattice

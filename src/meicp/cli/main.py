@@ -19,7 +19,7 @@ import sys
 import time
 import traceback
 
-from ..info import __version__
+from .._version import __version__
 from ..core.errors import ConvergenceError, MeicpError, ProblemError
 from ..core.log import configure_logging, rank0_print, world_rank
 from ..petsc import init

@@ -34,7 +34,7 @@ import os
 import time
 from pathlib import Path
 
-from ..info import __version__
+from .._version import __version__
 from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
 from ..contact.modal import has_contact
@@ -181,11 +181,6 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
 def format_rows(rows) -> str:
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}".rstrip() for k, v in rows)
-
-
-def summary_text(scene, result, *, ranks: int = 1) -> str:
-    """The table ``meicp solve`` prints at the end (also usable from Python)."""
-    return format_rows(summary_rows(scene, result, ranks=ranks))
 
 
 def run(args) -> int:

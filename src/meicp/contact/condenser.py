@@ -1,7 +1,7 @@
 """The condensation of one contact state's pencil onto its complementarity DOFs, on MUMPS and
 certified: the pieces of :mod:`.condensation` from a lattice and its maps, a proof that the
 lattice is held once the contact DOFs are (K̃_FF ≻ 0), and the condensed G(σ) with an error
-bound, for :mod:`.divergence_proof` and :mod:`.critical_friction`.
+bound, for :mod:`.divergence.condensed` and :mod:`.critical_friction`.
 
 Two ways (``method``):
 

@@ -8,10 +8,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..petsc.eigen import solve_ghep
-from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, pencil_is_negative, rounding_margin
+from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy
 from ..petsc.schur import MumpsFactor
 from .condensation import PencilPieces, from_bordered_schur
+from .rayleigh import pencil_is_negative
 
 #: the Schur complement's measured relative error is charged this many times over
 PROBE_SAFETY = 100.0
@@ -83,7 +84,7 @@ def refined_solve(factor, KFF, steps: int = REFINE_STEPS):
 def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
     """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
     use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
-    (:func:`~meicp.petsc.inertia.pencil_is_negative`), which also proves K̃_FF ≻ 0.
+    (:func:`~meicp.contact.rayleigh.pencil_is_negative`), which also proves K̃_FF ≻ 0.
     ``(None, why)`` when not certified.  ``pad``: as for :func:`held_factor`."""
     pad = pad or (lambda H: H)
     with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
@@ -106,7 +107,7 @@ def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
 
 
 def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
-    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.petsc.inertia.pencil_is_negative`)
+    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.contact.rayleigh.pencil_is_negative`)
     proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  ``pad``: as for
     :func:`held_factor`.  Collective."""
     shifted = (tau * MFF - KFF).tocsr()

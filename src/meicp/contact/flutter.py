@@ -32,23 +32,24 @@ import dataclasses
 import itertools
 import logging
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sl
 import scipy.sparse as sp
 
-from ..petsc.comm import available_memory_on, comm_size, mpi_comm
+from ..core.comm import available_memory_on, comm_size, mpi_comm
+from ..core.matrix import is_petsc_mat, to_dense
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
-from ..petsc.mat import is_petsc_mat, mat_from_scipy, to_dense
+from ..petsc.mat import mat_from_scipy
+from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState, state_names
 from .problem import pencil, pencil_of
 from .result import FlutterMode, growth_frequency
 
 log = logging.getLogger("meicp")
 
-#: dense QZ up to this many retained DOFs: its cubic time grows past the search's beyond
-#: (docs/benchmarks-notes-data.md)
+#: dense QZ up to this many retained DOFs: its time grows as n³, to minutes past this
+#: (docs/benchmarks-notes.md, "DENSE_MAX")
 DENSE_MAX = 2500
 #: a flutter mode's backward error must be at most this to be reported
 RESIDUAL_TOL = 1e-10
@@ -71,41 +72,28 @@ PROXY_ROWS = 8
 PROXY_LOCALISED = 0.6
 PROXY_NEAR_ROWS = 3
 #: memory the search adds per retained DOF, all ranks together (the factor of the 2n real form,
-#: measured and rounded up: docs/benchmarks-notes-data.md); it is skipped when that is not available
+#: measured and rounded up: docs/benchmarks-notes.md, "SEARCH_BYTES_PER_DOF"); it is skipped when
+#: that is not available
 SEARCH_BYTES_PER_DOF = 10_000
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
 #: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
 #: flutter eigenvalues (shift-and-invert then returns pseudo-pairs next to it); it is moved up
 #: off the cluster by OFF_CLUSTER·max(Im τ, 0.05|τ|) per try, at most OFF_CLUSTER_TRIES times:
-#: one such step reached the cluster's top edge where it was measured
-#: (docs/benchmarks-notes-data.md)
+#: one such move certified the cluster's top edge where it was measured
+#: (docs/benchmarks-notes.md, "OFF_CLUSTER")
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
 #: from this many retained DOFs the search *starts* off the cluster (at off_cluster(τ, 0)), with a
-#: Krylov basis of 16 (32 on the 2n form): the proxy's σ lies inside the cluster at these sizes,
-#: and above it a basis of 16 converges in far fewer restarts than one of 12
-#: (docs/benchmarks-notes-data.md)
+#: Krylov basis of 16 (32 on the 2n form): past it the proxy's σ lay inside the cluster, and
+#: above the cluster a basis of 16 converges in far fewer restarts than one of 12
+#: (docs/benchmarks-notes.md, "OFF_CLUSTER_FROM")
 OFF_CLUSTER_FROM = 200_000
 OFF_CLUSTER_NCV = 16
 #: from SEARCH_LARGE retained DOFs the shifted pencil is factored block-low-rank at this
-#: dropping tolerance (MUMPS CNTL(7)): faster, and the certified pairs' backward errors as
-#: without it (docs/benchmarks-notes-data.md)
+#: dropping tolerance (MUMPS CNTL(7)): faster, with the certified pairs' backward errors as
+#: without it (docs/benchmarks-notes.md, "LOW_RANK_TOL")
 LOW_RANK_TOL = 1e-10
-
-
-@dataclass
-class PencilFlutter:
-    """The flutter analysis of one sliding pencil: ``flutter`` (True / False / None),
-    ``modes`` (σ, x on the retained DOFs, backward error, radius, found_by), fastest first,
-    and ``evidence`` (what was searched, what it proves)."""
-
-    flutter: bool | None
-    modes: list = field(default_factory=list)
-    evidence: str = ""
-    complete: bool = False
-    counts: dict = field(default_factory=dict)
-    rejected: list = field(default_factory=list)
 
 
 def _norm1(M: np.ndarray) -> float:
@@ -113,7 +101,7 @@ def _norm1(M: np.ndarray) -> float:
 
 
 def _fastest_first(modes: list) -> list:
-    return sorted(modes, key=lambda m: (-growth_frequency(m[0])[0], -abs(m[0].imag)))
+    return sorted(modes, key=lambda m: (-growth_frequency(m.sigma)[0], -abs(m.sigma.imag)))
 
 
 def _normalise(x: np.ndarray) -> np.ndarray:
@@ -212,26 +200,25 @@ def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_fa
         near = near[near != i]
         certified_real[i] = not np.any(np.abs(w[near] - w[i]) <= radius[near] + radius[i])
     borderline = (near_axis & ~certified_real) | unresolved
-    out = PencilFlutter(None, complete=True)
+    modes, rejected = [], []
     for i in np.flatnonzero(nonreal & (w.imag > 0)):
         res = backward_error(A, B, complex(w[i]), X[:, i], norm_A, norm_B)
         if res <= residual_tol:
-            out.modes.append((complex(w[i]), _normalise(X[:, i]), res, float(radius[i]), how))
+            modes.append(FlutterCandidate(complex(w[i]), _normalise(X[:, i]), res, float(radius[i]), how))
         else:
-            out.rejected.append((complex(w[i]), res))
-    out.modes = _fastest_first(out.modes)
-    out.counts = {"eigenvalues": n, "nonreal_pairs": int(nonreal.sum()) // 2,
-                  "certified_real": int(certified_real.sum()), "borderline": int(borderline.sum()),
-                  "infinite": int(infinite.sum()), "rejected": len(out.rejected)}
-    out.flutter = True if out.modes else (None if borderline.any() or out.rejected else False)
+            rejected.append(RejectedPair(complex(w[i]), res))
+    counts = {"eigenvalues": n, "nonreal_pairs": int(nonreal.sum()) // 2,
+              "certified_real": int(certified_real.sum()), "borderline": int(borderline.sum()),
+              "infinite": int(infinite.sum()), "rejected": len(rejected)}
+    flutter = True if modes else (None if borderline.any() or rejected else False)
     infinite_note = f", {int(infinite.sum())} infinite (not modes)" if infinite.any() else ""
-    rejected_note = (f", {len(out.rejected)} non-real pair(s) failing the residual gate {residual_tol:g} "
-                     "(not reported)" if out.rejected else "")
-    out.evidence = (f"{how} of all {n} eigenvalues{infinite_note}: {out.counts['nonreal_pairs']} non-real pair(s), "
-                    f"{out.counts['certified_real']} certified real, {out.counts['borderline']} borderline "
-                    f"(non-reality at rounding level){rejected_note}"
-                    + (" — a proof" if out.flutter is not None else ": undecided"))
-    return out
+    rejected_note = (f", {len(rejected)} non-real pair(s) failing the residual gate {residual_tol:g} "
+                     "(not reported)" if rejected else "")
+    evidence = (f"{how} of all {n} eigenvalues{infinite_note}: {counts['nonreal_pairs']} non-real pair(s), "
+                f"{counts['certified_real']} certified real, {counts['borderline']} borderline "
+                f"(non-reality at rounding level){rejected_note}"
+                + (" — a proof" if flutter is not None else ": undecided"))
+    return PencilFlutter(flutter, _fastest_first(modes), evidence, complete=True, counts=counts, rejected=rejected)
 
 
 def lambda_line_targets(growth: float, frequencies) -> list[complex]:
@@ -278,10 +265,11 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     for sigma, x, res in pairs:
                         margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
                         if res > residual_tol:
-                            rejected.append((sigma, res))
+                            rejected.append(RejectedPair(sigma, res))
                         elif abs(sigma.imag) > margin:
-                            if not any(abs(sigma - m[0]) <= SAME * abs(m[0]) for m in modes):
-                                modes.append((sigma, _normalise(x), res, margin, f"shift-invert at τ = {tau:.6g}"))
+                            if not any(abs(sigma - m.sigma) <= SAME * abs(m.sigma) for m in modes):
+                                modes.append(FlutterCandidate(sigma, _normalise(x), res, margin,
+                                                              f"shift-invert at τ = {tau:.6g}"))
                         elif sigma.imag != 0:
                             borderline += 1
                     if passed or not pairs or attempt == off_cluster_tries:
@@ -294,24 +282,22 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
         if own:
             A.destroy()
             B.destroy()
-    out = PencilFlutter(True if modes else None, _fastest_first(modes), rejected=rejected,
-                        counts={"targets": len(disks), "rejected": len(rejected), "borderline": borderline})
+    counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved)}
     text = "; ".join(f"|σ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} σ, {p} passing the residual gate)"
                      for t, r, k, p in disks)
     off = "".join(f"; every pair near τ = {a.real:.4g}{a.imag:+.4g}i failed the residual gate (pseudo-pairs, as "
                   f"shift-and-invert returns inside a cluster of ill-conditioned eigenvalues), so the target moved off "
                   f"it to {b.real:.4g}{b.imag:+.4g}i" for a, b in moved)
-    out.counts["moved"] = len(moved)
-    out.evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}{off}: the eigenvalues SLEPc "
+    evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}{off}: the eigenvalues SLEPc "
                     f"converged in {text}"
                     + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
                     + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else ""))
     if modes:
-        out.evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
-                         "is not (not a proof of the growth rate)")
+        evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
+                     "is not (not a proof of the growth rate)")
     else:
-        out.evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
-    return out
+        evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
+    return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected)
 
 
 # -- the scene level: branches, proxy, the choice of path -------------------------------------
@@ -389,11 +375,11 @@ def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[compl
         energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))
         return energy[:PROXY_NEAR_ROWS].sum() / energy.sum()
 
-    candidates = [m for m in found.modes if near_contact(m[1]) >= PROXY_LOCALISED] or found.modes
+    candidates = [m for m in found.modes if near_contact(m.x) >= PROXY_LOCALISED] or found.modes
     targets = []
     for m in candidates:
-        if all(abs(m[0] - t) > 0.1 * abs(t) for t in targets):
-            targets.append(m[0])
+        if all(abs(m.sigma - t) > 0.1 * abs(t) for t in targets):
+            targets.append(m.sigma)
         if len(targets) == count:
             break
     return targets
@@ -444,26 +430,14 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
     return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
 
 
-def _to_mode(entry, maps, branch: str) -> FlutterMode:
-    sigma, x, res, radius, how = entry
-    u = maps.Q @ x
+def _to_mode(candidate: FlutterCandidate, maps, branch: str) -> FlutterMode:
+    u = maps.Q @ candidate.x
     support, interface = [], {}
     for name, idx, kind in maps.pair_of:
         if kind == "t":
             (support if name == "base" else interface.setdefault(name, [])).append(idx)
-    return FlutterMode(sigma, _normalise(u), res, np.unique(np.array(support, dtype=np.int64)),
-                       {k: np.unique(v) for k, v in interface.items()}, radius, branch, how)
-
-
-@dataclass
-class FlutterVerdict:
-    """What :func:`analyze_flutter` gives ``analyze``: the verdict, the modes in natural
-    numbering (fastest first), the evidence and the seconds it took."""
-
-    flutter: bool | None
-    modes: list
-    evidence: str
-    seconds: float = 0.0
+    return FlutterMode(candidate.sigma, _normalise(u), candidate.residual, np.unique(np.array(support, dtype=np.int64)),
+                       {k: np.unique(v) for k, v in interface.items()}, candidate.radius, branch, candidate.found_by)
 
 
 def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options: dict | None = None,
@@ -499,5 +473,6 @@ def not_analysed(reason: str) -> FlutterVerdict:
     return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
 
 
-__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterVerdict", "PencilFlutter", "analyze_flutter", "dense_flutter",
-           "grazing_branches", "lambda_line_targets", "pencil_flutter", "proxy_targets", "search_flutter"]
+__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
+           "analyze_flutter", "dense_flutter", "grazing_branches", "lambda_line_targets", "pencil_flutter",
+           "proxy_targets", "search_flutter"]

@@ -9,7 +9,7 @@ MEiCP solution has ``σ = xᵀsym(A)x / xᵀsym(B)x < 0`` — holds on a convex 
 t = 0 (frictionless, held lattice) and at ``t_R`` it holds on all of ``[0, t_R]``.  ``t_R`` is
 found by halving from the scene's μ (where the caller's verdict already failed) and then
 geometric bisection, at most ``FACTORISATIONS`` LDLᵀ inertias.  The bound weakens as the
-lattice grows (the condensed proofs of :mod:`.divergence_proof` are sharper but cost a
+lattice grows (the condensed proofs of :mod:`.divergence.condensed` are sharper but cost a
 condensation per σ-window and per μ); it is a statement of what was proved, no more.
 """
 from __future__ import annotations
@@ -17,10 +17,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..petsc.inertia import rayleigh_bound
 from ..petsc.mat import combination, destroying
 from ..petsc.pencil import reduced_pencil
 from .problem import Pencil
+from .rayleigh import rayleigh_bound
 
 #: LDLᵀ inertias (each about one sparse factorisation of the pencil) spent locating t_R
 FACTORISATIONS = 8

@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 
+from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.errors import ProblemError
 from ..core.progress import Progress
 from ..core.validation import as_real, check_tol
@@ -41,10 +42,10 @@ from ..eicp.solve import available_methods
 from ..lattice.model import LatticeModel
 from ..lattice.size import check_size
 from ..petsc.assembly import LatticeMatrices
-from ..petsc.comm import available_memory_on, comm_size, index_max, mpi_comm
+from ..petsc.comm import index_max
 from ..petsc.stages import stage
 from ..scene import Scene
-from .divergence import divergence_of
+from .divergence import all_held, divergence_of
 from .flutter import analyze_flutter, not_analysed
 from .lines import BASE, ContactState, state_names
 from .maps import grazing_cases
@@ -113,11 +114,11 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
         result.interface_states = {line.name: state_names(line.states) for line in lines if line.name != BASE}
         # -- one MEiCP per grazing case ---------------------------------------------------
         method = method or scene.solver.method
-        modes, evidences, stable_flags, eicps, proofs, sliding = [], [], [], [], [], None
+        verdicts, sliding = [], None
         n_grazing = sum(s is ContactState.GRAZING for line in lines for s in line.states)
         progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
         for k, case in enumerate(grazing_cases(lines)):
-            progress.update(k, detail=f"{len(modes)} mode(s) so far")
+            progress.update(k, detail=f"{sum(len(v.modes) for v in verdicts)} mode(s) so far")
             t0 = time.perf_counter()
             with stage("reduce"):
                 pen = pencil_of(lattice, lines, case, static)
@@ -129,39 +130,31 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 log.info("MEiCP: %d retained DOFs, %d complementarity pairs%s", red.retained.size, red.J.size,
                          f", grazing case {case}" if case else "")
                 if red.retained.size == 0:
-                    evidences.append("every DOF is held (fixed or sticking): no mode can exist")
-                    stable_flags.append(True)
-                    eicps.append(None)
-                    proofs.append({"test": "all-held", "statement": evidences[-1]})
+                    verdicts.append(all_held())
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    modes_c, evidence, stable, eicp, proof = divergence_of(pen, scene, comm, method, lam_min, tol,
-                                                                   solver_options)
+                    verdict = divergence_of(pen, scene, comm, method, lam_min, tol, solver_options)
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):
                         sliding = analyze_flutter(lattice, lines, scene, pencil=pen, static=static,
                                                   options=dict(scene.petsc))
-            modes += modes_c
-            evidences.append(evidence)
-            stable_flags.append(stable)
-            eicps.append(eicp)
-            proofs.append(proof)
+            verdicts.append(verdict)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):
                 sliding = analyze_flutter(lattice, lines, scene, static=static, options=dict(scene.petsc))
-    modes.sort(key=lambda m: -m.sigma)
-    result.modes = modes
-    result.eicp = eicps
-    result.proofs = proofs
+    result.modes = sorted((m for v in verdicts for m in v.modes), key=lambda m: -m.sigma)
+    result.eicp = [v.eicp for v in verdicts]
+    result.proofs = [v.proof for v in verdicts]
+    stable_flags = [v.stable for v in verdicts]
     if any(s is False for s in stable_flags):  # a mode with σ ≥ 0, listed or not (lam_min)
         result.divergence = True
     elif all(s is True for s in stable_flags):
         result.divergence = False
     else:
         result.divergence = None
-    result.evidence = " | ".join(evidences)
+    result.evidence = " | ".join(v.evidence for v in verdicts)
     sliding = sliding or not_analysed("flutter = false")
     result.flutter, result.flutter_modes, result.flutter_evidence = sliding.flutter, sliding.modes, sliding.evidence
     result.compose_verdict()

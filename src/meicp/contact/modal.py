@@ -27,15 +27,17 @@ import time
 import numpy as np
 
 from ..core.errors import ConvergenceError
+from ..core.matrix import is_petsc_mat, max_abs_entry
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import LatticeMatrices
 from ..petsc.eigen import solve_ghep
-from ..petsc.inertia import nonnegative_count, pencil_is_negative, rounding_margin
-from ..petsc.mat import destroying, is_petsc_mat, mat_from_scipy, max_abs_entry, vec_to_numpy
+from ..petsc.inertia import nonnegative_count, rounding_margin
+from ..petsc.mat import destroying, mat_from_scipy, vec_to_numpy
 from ..petsc.stages import stage
 from ..scene import Scene
 from .problem import pencil_of
+from .rayleigh import pencil_is_negative
 from .result import InstabilityResult, Mode
 
 log = logging.getLogger("meicp")

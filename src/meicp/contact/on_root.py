@@ -1,5 +1,5 @@
 """Dense work done once, on rank 0, and its result given to every rank: the condensed
-proofs' and the critical friction's |J|×|J| decisions (:mod:`.divergence_proof`,
+proofs' and the critical friction's |J|×|J| decisions (:mod:`.divergence.condensed`,
 :mod:`.critical_friction`)."""
 from __future__ import annotations
 

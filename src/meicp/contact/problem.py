@@ -15,11 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError
+from ..core.matrix import is_petsc_mat
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import LatticeMatrices
-from ..petsc.comm import mpi_comm
-from ..petsc.mat import destroying, is_petsc_mat
+from ..petsc.mat import destroying
 from ..petsc.pencil import reduced_pencil
 from ..scene import SOLVE, Scene
 from .lines import BASE, ContactLine, contact_lines, with_states

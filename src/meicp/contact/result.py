@@ -142,14 +142,16 @@ class InstabilityResult(Result):
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
-    proofs: what stands behind the divergence verdict, one dict per MEiCP (grazing case):
-        ``test`` (``enumerate``, ``rayleigh-inertia``, ``rayleigh-window+condensed-…``,
+    proofs: what stands behind the divergence verdict, one
+        :class:`~meicp.contact.divergence.DivergenceProof` per MEiCP (grazing case): ``test``
+        (``enumerate``, ``rayleigh-inertia``, ``rayleigh-window+condensed-…``,
         ``certified-mode``, or ``""`` when nothing was proved), ``statement``, and for the
         large-problem path ``sigma_window`` (the σ-interval proved free of modes, or None),
         ``supports_visited``, ``eigen_solves``; an undecided one also ``stable_friction``
         (contact line → the μ up to which these states are proved stable) and
         ``stable_friction_scale`` (that μ over the scene's) (:mod:`meicp.contact.divergence`,
-        :mod:`meicp.contact.friction_range`).
+        :mod:`meicp.contact.friction_range`).  :meth:`to_dict` writes each as its
+        ``to_dict()``.
     eicp: the raw :class:`~meicp.eicp.problem.EiCPResult` of each MEiCP solved, one per
         grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
         case with every DOF held: nothing to solve); empty when no MEiCP was reached.
@@ -229,7 +231,7 @@ class InstabilityResult(Result):
             "status": self.status, "success": self.success, "message": self.message,
             "evidence": self.evidence, "divergence_failure": self.divergence_failure,
             "iterations": int(self.iterations),
-            "proofs": [{str(k): _json_value(v) for k, v in p.items()} for p in self.proofs],
+            "proofs": [{str(k): _json_value(v) for k, v in p.to_dict().items()} for p in self.proofs],
             "modes": [m.to_dict() for m in self.modes],
             "flutter_evidence": self.flutter_evidence,
             "flutter_modes": [m.to_dict() for m in self.flutter_modes],

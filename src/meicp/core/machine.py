@@ -8,8 +8,8 @@ large is allocated.  Memory this process freed but its allocator still holds (gl
 freed small blocks, e.g. a block-low-rank MUMPS factor's, in its heap) is not seen there:
 ``reclaim=True`` hands it back first (:func:`release_free_heap`) — a search after a large
 factorisation was refused with several GiB of the process's own free heap uncounted.  Not
-by default: memory kept is memory not faulted in again (12 s of page faults in one
-factorisation at 10⁶ DOFs here).
+by default: memory kept is memory not faulted in again, and faulting it in again is slow
+at scale (docs/benchmarks-notes-house.md).
 """
 
 from __future__ import annotations

@@ -3,9 +3,8 @@
 NumPy/SciPy's OpenBLAS starts one thread per core.  meicp's dense phases — the condensed
 divergence certificates, the critical friction's bracket, the enumeration of supports — are
 hundreds of eigen-solves of order 10 to 10³ in a loop.  A second thread gains them little on
-an idle machine, and on a busy one threads spinning against other processes made them 44×
-slower (a condensed proof at 300 sliding contacts, 2 cores, 5 other jobs: 74 s against
-1.7 s; docs/benchmarks.md, "Divergence verdicts past 16 contacts").  So these phases run
+an idle machine, and on a busy one threads spinning against other processes made them many
+times slower (docs/benchmarks-notes-house.md, core).  So these phases run
 with ``MEICP_BLAS_THREADS`` threads (default 1) through threadpoolctl, the way scikit-learn
 bounds its BLAS; the sparse factorisations (MUMPS) and the flutter analysis's single large
 QZ keep the process's setting.  threadpoolctl comes from Debian (``make setup``).

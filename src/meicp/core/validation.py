@@ -203,8 +203,8 @@ def scale(M) -> float:
 
 def row_max_abs(M) -> np.ndarray:
     """``max_j |m_ij|`` for every row i of a NumPy or SciPy matrix: the row scales of the
-    row-wise certificates, which hold whatever the scale of each row (a PETSc Mat:
-    :func:`meicp.petsc.mat.row_max_abs`)."""
+    row-wise certificates, which hold whatever the scale of each row (any kind of matrix:
+    :func:`meicp.core.matrix.row_max_abs`)."""
     if sp.issparse(M):
         return np.asarray(abs(M).max(axis=1).toarray()).ravel()
     return np.abs(np.asarray(M)).max(axis=1)

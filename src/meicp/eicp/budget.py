@@ -12,12 +12,9 @@ from __future__ import annotations
 
 from ..core.errors import ProblemError
 
-#: seconds per unit of 2^|J|·r³ of a whole enumeration on this machine (one core, one BLAS
-#: thread).  Measured with solve_eicp(method="enumerate") on random symmetric pencils:
-#: 2.9 ns at r = 20 (|J| = 14), 1.7 at 60, 0.84 at 120, 0.57 at 250, 0.42 at 500 (small orders
-#: pay the batches' overhead); the divergence enumeration of 22 pairs on 110 retained DOFs
-#: took 3.4 h, 2.2 ns; a lone scipy.linalg.eig QZ of order 400 to 1,200 costs 3.9 to 5.4 ns
-#: (the slow path of ill-conditioned B_RR).  2 ns is the pessimistic middle.
+#: seconds per unit of 2^|J|·r³ of a whole enumeration (one core, one BLAS thread): the
+#: pessimistic middle of the measured range, so that a refused enumeration would really have
+#: taken too long (the measurements: docs/benchmarks-notes-house.md, eicp)
 SECONDS_PER_FLOP = 2e-9
 #: the largest 2^|J|·r³ an enumeration by name may start: about an hour at SECONDS_PER_FLOP
 #: (16 pairs up to r ≈ 310, 20 pairs up to r ≈ 125, 24 pairs up to r ≈ 50)

@@ -390,9 +390,9 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     t0 = time.perf_counter()
     e = _Enumerator(problem, tol, lam_min, lam_max)
     # this rank's share of the supports, and their cost for the estimate of the time left: a
-    # support of size k is a dense eigen-solve of order |F| + k, batched; measured at |J| = 18
-    # the time per support grows about linearly with the order (the batches' overhead), not
-    # as its cube
+    # support of size k is a dense eigen-solve of order |F| + k, batched, whose time grows
+    # about linearly with the order (the batches' overhead), not as its cube
+    # (docs/benchmarks-notes-house.md, eicp)
     share = [len(range(rank, math.comb(J.size, k), size)) for k in range(J.size + 1)]
     cost = [float(share[k]) * (problem.F.size + k) for k in range(J.size + 1)]
     progress = Progress("enumeration" + (f" (rank 0's share on {size} ranks)" if size > 1 else ""),

@@ -31,9 +31,9 @@ from functools import cached_property
 import numpy as np
 
 from ..core.errors import ProblemError
+from ..core.matrix import is_petsc_mat, matrix_shape, matvec, max_abs_entry, row_max_abs, to_dense
 from ..core.results import Result
 from ..core.validation import as_index_set, as_int, as_matrix, as_real, check_tol
-from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, row_max_abs, to_dense
 
 #: default relative certificate tolerance
 DEFAULT_TOL = 1e-10
@@ -69,9 +69,10 @@ class EiCPProblem:
         if is_petsc_mat(A) or is_petsc_mat(B):
             if not (is_petsc_mat(A) and is_petsc_mat(B)):
                 raise ProblemError("A and B must both be PETSc Mats or both NumPy/SciPy")
-            n = A.getSize()[0]
-            if A.getSize() != (n, n) or B.getSize() != (n, n):
-                raise ProblemError(f"A and B must be square of one size, got {A.getSize()} and {B.getSize()}")
+            n = matrix_shape(A)[0]
+            if matrix_shape(A) != (n, n) or matrix_shape(B) != (n, n):
+                raise ProblemError(f"A and B must be square of one size, got {matrix_shape(A)} and "
+                                   f"{matrix_shape(B)}")
             return cls(A, B, as_index_set(J, n, "J"))
         A = as_matrix(A, "A")
         B = as_matrix(B, "B")
@@ -83,7 +84,7 @@ class EiCPProblem:
 
     @property
     def n(self) -> int:
-        return self.A.getSize()[0] if self.distributed else self.A.shape[0]
+        return matrix_shape(self.A)[0]
 
     @property
     def distributed(self) -> bool:

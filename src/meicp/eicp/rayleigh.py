@@ -41,7 +41,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
 from ..core.errors import ProblemError
-from ..petsc.mat import mat_to_scipy, to_dense
+from ..core.matrix import to_dense, to_scipy
 from ..core.validation import check_spd, check_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_pair
 from .scaling import normalised, restore, scaled_value
@@ -147,7 +147,7 @@ def _serial_symmetric_pencil(problem: EiCPProblem):
     """(A, B) as ndarray / CSR after the symmetric-definite checks this method relies on."""
     A, B = problem.A, problem.B
     if problem.distributed:
-        A, B = mat_to_scipy(A), mat_to_scipy(B)
+        A, B = to_scipy(A), to_scipy(B)
     try:
         check_symmetric(A, "A")
     except ProblemError as exc:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..petsc.mat import is_petsc_mat
+from ..core.matrix import ldexp, release
 from .problem import EiCPProblem, certify_pair
 
 #: bound on the equilibration exponents: scaled entries stay finite (2^800 < 1e308)
@@ -143,19 +143,6 @@ def refine_pair(A: np.ndarray, B: np.ndarray, R: np.ndarray, lam: float, x: np.n
 RANGE_EXPONENT = 100
 
 
-def _scaled_matrix(M, exponent: int):
-    """M·2^exponent, exactly, as a new matrix (NumPy, SciPy sparse or PETSc Mat)."""
-    if is_petsc_mat(M):
-        out = M.duplicate(copy=True)
-        out.scale(2.0 ** exponent)
-        return out
-    if hasattr(M, "tocsr"):
-        out = M.tocsr(copy=True)
-        out.data = np.ldexp(out.data, exponent)
-        return out
-    return np.ldexp(M, exponent)
-
-
 def normalised(problem):
     """``(scaled, E)``: the problem with max|A| ≈ max|B| ≈ 1 and λ = 2^E·λ̃, or
     ``(problem, None)`` when its scales are within 2^±RANGE_EXPONENT (nothing to do)."""
@@ -164,7 +151,7 @@ def normalised(problem):
     eb = -int(_exponent(b))
     if abs(ea) <= RANGE_EXPONENT and abs(eb) <= RANGE_EXPONENT:
         return problem, None
-    scaled = EiCPProblem(_scaled_matrix(problem.A, ea), _scaled_matrix(problem.B, eb), problem.J)
+    scaled = EiCPProblem(ldexp(problem.A, ea), ldexp(problem.B, eb), problem.J)
     return scaled, eb - ea
 
 
@@ -197,7 +184,6 @@ def restore(problem, scaled, result, E: int, tol: float):
                           f"double precision (λ̃ = {beyond[0].lam:.6g}; in candidates): {result.message}")
     elif result.status == "solved" and beyond:
         result.message += f"; {len(beyond)} more with λ beyond double precision (in candidates)"
-    for M in (scaled.A, scaled.B):
-        if is_petsc_mat(M):
-            M.destroy()
+    release(scaled.A)  # the scaled copies (a PETSc Mat's memory is not Python's)
+    release(scaled.B)
     return result

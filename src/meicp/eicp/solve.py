@@ -9,6 +9,11 @@
   candidate the others reached.  It stops at the first certified answer (or the
   enumeration's proof that there is none) and records every method it ran, with the
   status and message that ended it, in ``result.attempts``.
+
+The methods are a registry (:data:`SOLVERS`, filled by :func:`register`, as in qpsolvers):
+the NumPy/SciPy ones are registered here, ``active-set`` and ``semismooth`` by the modules
+of ``meicp.petsc`` that implement them (``eicp_active_set.py``, ``eicp_semismooth.py``):
+they build on this package, which imports nothing of PETSc.
 """
 
 from __future__ import annotations
@@ -18,18 +23,16 @@ import time
 
 import numpy as np
 
-from ..core.errors import ProblemError, SolverNotFound
-from ..core.validation import is_symmetric
-from ..petsc.comm import mpi_comm
-from ..petsc.options import PetscOptionError
-from .active_set import active_set
+from ..core.comm import mpi_comm
+from ..core.errors import PetscOptionError, ProblemError, SolverNotFound
+from ..core.matrix import is_symmetric, matrix_comm
 from .budget import check_enumeration_work
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
-from .semismooth import semismooth
 
-#: auto enumerates up to this |J| (2^16 supports: seconds) when the pencil is this small
+#: auto enumerates when |J| and n are at most these (2^16 supports; what they cost:
+#: docs/benchmarks-notes-layering.md)
 AUTO_ENUMERATE_J = 16
 AUTO_ENUMERATE_N = 400
 #: auto tries rayleigh up to this n: SPG needs only products, but from 8 starts of up to
@@ -43,12 +46,20 @@ LOOSE_TOL = 1e-6
 log = logging.getLogger("meicp")
 
 
+#: method name → ``solver(problem, **options) -> EiCPResult``
 SOLVERS = {
     "enumerate": enumerate_eicp,
-    "active-set": active_set,
     "rayleigh": rayleigh,
-    "semismooth": semismooth,
 }
+
+
+def register(name: str):
+    """Decorator: the function becomes method ``name`` of :func:`solve_eicp` (how
+    ``meicp.petsc`` adds the methods that need PETSc)."""
+    def add(solver):
+        SOLVERS[name] = solver
+        return solver
+    return add
 
 
 def available_methods() -> list[str]:
@@ -86,7 +97,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
         # explicit max_j is the caller's own bound and accepts the cost
         check_enumeration_work(int(problem.J.size), int(problem.n),
                                f"solve_eicp(..., max_j={max(int(problem.J.size), 1)}) from Python")
-    comm = mpi_comm(problem.A.getComm() if problem.distributed and comm is None else comm)
+    comm = matrix_comm(problem.A) if comm is None else mpi_comm(comm)
     t0 = time.perf_counter()
     kw = dict(kwargs, tol=tol, lam_min=lam_min, comm=comm)
     result = _solve_auto(problem, kw) if method == "auto" else _run(method, problem, kw)
@@ -112,7 +123,7 @@ def auto_order(problem: EiCPProblem) -> list[str]:
     order = []
     if problem.J.size <= AUTO_ENUMERATE_J and problem.n <= AUTO_ENUMERATE_N and not problem.distributed:
         order.append("enumerate")
-    serial = not problem.distributed or problem.A.getComm().getSize() == 1
+    serial = matrix_comm(problem.A) is None
     if serial and problem.n <= AUTO_RAYLEIGH_N and _symmetric_pair(problem):
         order.append("rayleigh")
     order.append("active-set")
@@ -122,9 +133,6 @@ def auto_order(problem: EiCPProblem) -> list[str]:
 
 
 def _symmetric_pair(problem: EiCPProblem) -> bool:
-    if problem.distributed:  # on one rank here: PETSc's own test
-        a, b = problem.scales()
-        return bool(problem.A.isSymmetric(1e-12 * a) and problem.B.isSymmetric(1e-12 * b))
     return is_symmetric(problem.A, 1e-12) and is_symmetric(problem.B, 1e-12)
 
 

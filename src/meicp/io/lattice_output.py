@@ -52,12 +52,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..core.cleanup import on_interrupt
+from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from ..lattice.assembly import as_model
 from ..lattice.model import BOND_KINDS, LatticeModel
-from ..petsc.comm import mpi_comm
 from .scene import as_scene
 
 FORMAT = "meicp-lattice"

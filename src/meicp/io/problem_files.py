@@ -256,25 +256,6 @@ def read_hdf5_problem(path, names=("M", "q")) -> dict:
     return out
 
 
-def write_hdf5_problem(path, **arrays) -> None:
-    """Write dense arrays and SciPy sparse matrices (as CSR groups); temporary name, then rename."""
-    import h5py
-
-    path = Path(path)
-    tmp = path.with_name(path.name + ".part")
-    with h5py.File(tmp, "w") as f:
-        for name, value in arrays.items():
-            if sp.issparse(value):
-                value = sp.csr_matrix(value)
-                g = f.create_group(name)
-                for key in ("data", "indices", "indptr"):
-                    g[key] = getattr(value, key)
-                g["shape"] = np.array(value.shape)
-            else:
-                f[name] = np.asarray(value)
-    tmp.replace(path)
-
-
 # -- MATLAB --------------------------------------------------------------------------------
 
 def read_mat_problem(path, names=("M", "q")) -> dict:

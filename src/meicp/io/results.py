@@ -103,9 +103,9 @@ from pathlib import Path
 import numpy as np
 
 from ..core.cleanup import on_interrupt, uninterrupted
+from ..core.comm import mpi_comm
 from ..core.errors import MeicpError, ProblemError
 from ..lattice.assembly import as_model
-from ..petsc.comm import mpi_comm
 from ..petsc.stages import stage as log_stage
 from ..plotting import lattice as plotting
 from ..scene import Scene

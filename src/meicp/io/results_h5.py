@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..scene import Scene
 from .lattice_output import UNITS_CONVENTION
 from .results_records import critical_friction_record
@@ -75,7 +75,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             **{name: {True: 1, False: 0}.get(getattr(result, name, None), -1) for name in ("divergence", "flutter")},
             "flutter_evidence": getattr(result, "flutter_evidence", ""),
             "divergence_failure": getattr(result, "divergence_failure", None),
-            "divergence_tests": ", ".join(p.get("test") or "none" for p in getattr(result, "proofs", [])),
+            "divergence_tests": ", ".join(p.test or "none" for p in getattr(result, "proofs", [])),
             "divergence_proofs": json.dumps(result.to_dict().get("proofs", []) if hasattr(result, "to_dict") else []),
             "n_flutter_modes": len(prep["flutter_modes"])})
         f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))

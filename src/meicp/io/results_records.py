@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import scipy
 
-from .. import __version__
+from .._version import __version__
 from ..info import collect
 from ..scene import Scene
 

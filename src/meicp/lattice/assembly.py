@@ -15,8 +15,8 @@ Serial and plain SciPy: :func:`assemble_scipy` gives CSR matrices.  The distribu
 assembly (:mod:`meicp.petsc.assembly`) builds its rows from the same blocks
 (:func:`stiffness_block`, :func:`mass_diagonal`) and hosts :func:`meicp.assemble`, which picks
 one or the other by communicator; nothing here knows of PETSc.
-:func:`bond_stiffness` is an independent, bond-by-bond reference for arbitrary node
-positions (deformed cells, tests).
+(An independent, bond-by-bond reference for arbitrary node positions is the tests' own:
+``tests/helpers.py``.)
 """
 
 from __future__ import annotations
@@ -149,29 +149,3 @@ def mass_matrix_scipy(model: LatticeModel) -> sp.csr_matrix:
     idx = np.int32 if n < 2**31 - 1 else np.int64
     return sp.csr_matrix((mass_diagonal(model), np.arange(n, dtype=idx), np.arange(n + 1, dtype=idx)),
                          shape=(n, n), copy=False)
-
-
-def bond_stiffness(points, ends, k, n_nodes: int | None = None) -> sp.csr_matrix:
-    """Reference assembly, bond by bond, for arbitrary node positions.
-
-    points (N, 2): node positions; ends (m, 2): node pairs; k (m,) or scalar: stiffness.
-    Each bond adds ``k [[A, −A], [−A, A]]`` with ``A = e eᵀ`` from its own direction.
-    Vectorised (COO); meant for small problems, deformed cells and cross-checks.
-    """
-    points = np.asarray(points, dtype=float)
-    ends = np.asarray(ends, dtype=np.int64).reshape(-1, 2)
-    k = np.broadcast_to(np.asarray(k, dtype=float), (ends.shape[0],))
-    n_nodes = points.shape[0] if n_nodes is None else n_nodes
-    d = points[ends[:, 1]] - points[ends[:, 0]]
-    length = np.linalg.norm(d, axis=1)
-    if np.any(length == 0):
-        raise ProblemError("a bond joins two nodes at the same position")
-    e = d / length[:, None]
-    A = k[:, None, None] * e[:, :, None] * e[:, None, :]  # (m, 2, 2)
-    dofs = 2 * ends[:, :, None] + np.arange(2)  # (m, 2 ends, 2 comps)
-    dofs = dofs.reshape(-1, 4)  # [a_x, a_y, b_x, b_y]
-    blocks = np.concatenate([np.concatenate([A, -A], axis=2),
-                             np.concatenate([-A, A], axis=2)], axis=1)  # (m, 4, 4)
-    rows = np.repeat(dofs, 4, axis=1).ravel()
-    cols = np.tile(dofs, (1, 4)).ravel()
-    return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(2 * n_nodes, 2 * n_nodes))

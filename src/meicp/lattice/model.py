@@ -102,10 +102,6 @@ class LatticeModel:
                 self.cut_above[starts[itf.index + 1] - 1] = True
         self.mass_per_material = np.array([m.density for m in mats]) * self.spacing ** 3
 
-    @classmethod
-    def from_scene(cls, scene) -> "LatticeModel":
-        return cls(scene)
-
     # ------------------------------------------------------------------ sizes, numbering
     @property
     def n_nodes(self) -> int:

@@ -1,7 +1,7 @@
 """What a scene costs, known before anything is built: DOFs, nonzeros of K and a low
 estimate of the memory, checked against what the machine and PETSc's index type can hold.
 
-A scene with ``nx = 10⁹`` used to grow to 15 GB of resident memory without a message; now
+A scene with ``nx = 10⁹`` used to grow until the machine ran out of memory without a message; now
 it is refused at once with a :class:`~meicp.core.errors.ProblemError` that names the keys
 (``lattice.nx``, ``layers[k].rows``).  The estimates are deliberately low (below every
 measurement of docs/benchmarks.md), so a refusal is certain: the run could not fit.  A
@@ -17,9 +17,8 @@ from ..scene import Scene
 
 #: nonzeros per DOF row of K, at most: a node and its 8 neighbours, 2 DOFs each
 NONZEROS_PER_DOF = 18
-#: bytes per DOF, at least, of each use of a scene (measured on 10⁵–10⁶ DOFs, 1 rank, above
-#: the interpreter: ``analyze`` 3.5–4.1 kB, docs/benchmarks/scaling.csv; ``meicp lattice``
-#: 0.56 kB, 0.23 kB with ``--no-assemble``, on data/scenes/extensive.toml)
+#: bytes per DOF, at least, of each use of a scene: below every measurement, so that a
+#: refusal is certain (the measurements: docs/benchmarks-notes-house.md, lattice)
 BYTES_PER_DOF = {"analysis": 3000, "lattice": 400, "geometry": 150}
 _USES = {"analysis": "an analysis", "lattice": "the lattice with K and M", "geometry": "the lattice geometry"}
 

@@ -20,7 +20,7 @@ Two regimes:
     support of a solution, ``M_SS`` is singular, so only singular principal submatrices
     are examined: a one-dimensional null space is checked for a sign-definite vector
     directly.  Larger null spaces (rank-deficient or structured M) are not enumerated one
-    LP at a time — that took seconds for a rank-one 12×12 matrix — but settled together
+    LP at a time — too slow already for a rank-one 12×12 matrix — but settled together
     by one small mixed-integer feasibility problem (HiGHS) with the support as binaries.
   * semimonotone (E0) — violated iff some ``x ≥ 0, x ≠ 0`` has ``(Mx)_i < 0`` on its
     support.  A *minimal* violating support ``S`` has ``M_SS`` nonsingular and
@@ -69,8 +69,9 @@ from .classes_report import CLASS_NAMES, LABELS, MatrixClasses, _guarantees, _St
 from .classes_sufficient import _offdiag, _sufficient_tests
 from .game import game_value
 
-#: largest exact_limit accepted: the exact tests visit 2^n − 1 principal submatrices
-#: (n = 12 well under a second, doubling per n: n = 20 takes minutes)
+#: largest exact_limit accepted: the exact tests visit 2^n − 1 principal submatrices, their
+#: time doubling per n; beyond this a call would run for far longer than anyone waits
+#: (docs/benchmarks-notes-house.md, lcp)
 MAX_EXACT_LIMIT = 20
 
 #: largest dense_limit accepted: a dense copy of order 20000 is 3.2 GB
@@ -147,14 +148,15 @@ def classify(M, *, exact_limit: int = 12, tol: float = 1e-10, dense_limit: int =
              det_limit: int = 500, game_limit: int = 1000) -> MatrixClasses:
     """Classify the square matrix ``M`` (dense or SciPy sparse) for LCP theory.
 
-    exact_limit: run the exponential all-subset tests when ``n ≤ exact_limit`` (n = 12
-        takes well under a second); above it only sufficient tests, undecided → None.
+    exact_limit: run the exponential all-subset tests when ``n ≤ exact_limit`` (fast at the
+        default, docs/benchmarks-notes-house.md); above it only sufficient tests, undecided
+        → None.
     tol: relative tolerance (to ``max|M|``) below which a quantity is treated as zero.
     dense_limit: sparse input is densified only up to this size; above it only
         sparse-friendly tests run (sign patterns, diagonal dominance, sparse LDLᵀ).
     det_limit: the full determinant/singular values of M are used up to this size.
     game_limit: the game value LP is solved up to this size (else ``game_value`` is None);
-        a sparse LP with n = 3000 already takes seconds.
+        its sparse LP is slow well before n = 3000 (docs/benchmarks-notes-house.md).
 
     Raises :class:`~meicp.core.errors.ProblemError` for non-square, empty, complex or
     non-finite M, for tol outside (0, 1e-2], for an ``exact_limit`` above

@@ -24,10 +24,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..core.matrix import (checked_matrix, is_petsc_mat, matrix_shape, matvec, max_abs_entry, row_max_abs,
+                           to_dense)
 from ..core.results import SOLVED, Result
-from ..core.validation import as_matrix, as_vector
-from ..petsc.lcp import check_petsc_matrix
-from ..petsc.mat import is_petsc_mat, matvec, max_abs_entry, row_max_abs, to_dense
+from ..core.validation import as_vector
 
 #: default relative certificate tolerance
 DEFAULT_TOL = 1e-10
@@ -43,11 +43,8 @@ class LCPProblem:
     @classmethod
     def from_data(cls, M, q) -> "LCPProblem":
         """Validate ``M`` (ndarray, SciPy sparse or PETSc Mat) and ``q`` (NumPy, full length)."""
-        if is_petsc_mat(M):
-            check_petsc_matrix(M)
-            return cls(M, as_vector(q, M.getSize()[0], "q"))
-        M = as_matrix(M, "M")
-        return cls(M, as_vector(q, M.shape[0], "q"))
+        M = checked_matrix(M, "M")  # a PETSc Mat is checked in place (collective), not copied
+        return cls(M, as_vector(q, matrix_shape(M)[0], "q"))
 
     @property
     def distributed(self) -> bool:

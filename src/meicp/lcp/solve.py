@@ -9,6 +9,10 @@ Methods:
 - ``tao``: PETSc TAO bound-constrained QP (TRON), symmetric M, sparse or distributed.
 - ``auto``: picks by size, sparsity and symmetry and falls back when a method fails;
   every attempt is recorded in ``result.attempts``.
+
+The methods are a registry (:data:`SOLVERS`, filled by :func:`register`): the NumPy/SciPy
+ones are registered here, ``newton`` and ``tao`` by :mod:`meicp.petsc.lcp`, which builds on
+this package; it imports nothing of PETSc.
 """
 
 from __future__ import annotations
@@ -16,56 +20,33 @@ from __future__ import annotations
 import time
 
 from ..core.errors import ProblemError, SolverNotFound
-from ..core.validation import as_int, as_real, check_tol, is_symmetric
-from ..petsc import lcp as petsc_lcp
+from ..core.matrix import is_symmetric
+from ..core.validation import as_int, as_real, check_tol
 from .enumeration import enumerate_lcp
 from .lemke import lemke
 from .pgs import pgs
-from .problem import DEFAULT_TOL, LCPProblem, LCPResult, best_of, certify, refine_on_support
+from .problem import DEFAULT_TOL, LCPProblem, LCPResult
 
 #: largest n for which auto uses dense pivoting on a dense matrix
 DENSE_LIMIT = 3000
 #: sparse matrices up to this size are treated as dense by auto
 SMALL = 500
 
-
-def _petsc_method(kind: str):
-    def run(problem: LCPProblem, *, tol: float = DEFAULT_TOL, comm=None, options=None,
-            max_iter: int | None = None, snes_type: str = "vinewtonrsls", tao_type: str = "tron",
-            **_ignored) -> LCPResult:
-        M = problem.M
-        if kind == "tao" and not problem.distributed and not is_symmetric(M, 1e-12):
-            raise ProblemError("tao solves the LCP as a QP and needs a symmetric M (use newton)")
-        PETSc = petsc_lcp.import_petsc()
-        try:
-            if kind == "tao":
-                x, its, reason, seconds = petsc_lcp.tao_bqp(M, problem.q, comm=comm, tol=min(tol, 1e-12),
-                                                           max_iter=max_iter or 500, tao_type=tao_type,
-                                                           options=options)
-            else:
-                x, its, reason, seconds = petsc_lcp.snes_vi(M, problem.q, comm=comm, tol=min(tol, 1e-12),
-                                                           max_iter=max_iter or 200, snes_type=snes_type,
-                                                           options=options)
-        except PETSc.Error as exc:  # e.g. TAO's line search on a QP that is unbounded below
-            return LCPResult(method=kind, status="petsc_error",
-                             message=f"PETSc error {exc.ierr}: " + str(exc).strip().splitlines()[-1].strip())
-        result = LCPResult(method=kind, iterations=its, message=f"PETSc: {reason}")
-        result.timings["solve"] = seconds
-        converged = "CONVERGED" in reason
-        x = best_of(problem, x, refine_on_support(problem, x)) if converged else x
-        return certify(problem, result, x, tol=tol,
-                       failure_status="certificate_failed" if converged else "not_converged")
-    run.__name__ = kind
-    return run
-
-
+#: method name → ``solver(problem, *, tol, comm, **options) -> LCPResult``
 SOLVERS = {
     "lemke": lemke,
     "enumerate": enumerate_lcp,
     "pgs": pgs,
-    "newton": _petsc_method("newton"),
-    "tao": _petsc_method("tao"),
 }
+
+
+def register(name: str):
+    """Decorator: the function becomes method ``name`` of :func:`solve_lcp` (how
+    ``meicp.petsc`` adds the methods that need PETSc)."""
+    def add(solver):
+        SOLVERS[name] = solver
+        return solver
+    return add
 
 
 def available_methods() -> list[str]:
@@ -92,8 +73,6 @@ def auto_order(problem: LCPProblem) -> list[str]:
 
 
 def _symmetric(problem: LCPProblem) -> bool:
-    if problem.distributed:
-        return bool(problem.M.isSymmetric(1e-12 * problem.matrix_scale))
     return is_symmetric(problem.M, 1e-12)
 
 

@@ -1,5 +1,10 @@
 """The PETSc/SLEPc layer: the only place that imports petsc4py and slepc4py.
 
+It builds on ``lcp`` and ``eicp`` one way: :mod:`~meicp.petsc.mat` registers the PETSc Mat
+with the operations of :mod:`meicp.core.matrix`, and the methods that need PETSc register
+themselves by name (``eicp_active_set``, ``eicp_semismooth``, ``lcp``); ``meicp/__init__``
+imports those modules, so the registries are whole whatever the caller imported.
+
 Debian installs petsc4py/slepc4py under ``/usr/lib/petscdir/...`` and ``/usr/lib/slepcdir/...``
 rather than on the default ``sys.path`` (docs/design.md §11).  :func:`import_petsc` finds them, so
 users need no ``PETSC_DIR``; ``make setup`` also writes a ``.pth`` file into the venv

@@ -22,12 +22,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from ..lattice.assembly import (as_model, assemble_scipy, chunks, index_dtype, mass_diagonal,
                                 neighbour_exists, stiffness_block)
 from ..lattice.model import SLOTS, LatticeModel
 from . import import_petsc
-from .comm import mpi_comm, to_petsc_comm
+from .comm import to_petsc_comm
 
 
 def assemble(scene, comm=None):

@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import import_petsc
-from .options import EICP_VI, configure_and_solve
+from .options import EICP_VI, configure_and_solve, petsc_errors
 
 PREFIX = EICP_VI
 
@@ -73,13 +73,15 @@ class BorderedJacobian:
         return vals
 
 
+@petsc_errors("SNES VI of the EiCP")
 def snes_vi_eicp(A, B, J: np.ndarray, x0: np.ndarray, lam0: float, *, atol: float,
                  max_iter: int = 200, snes_type: str = "vinewtonrsls",
                  options: dict | None = None):
     """Solve the MCP above from ``(x0, lam0)``.  A, B: ndarray or SciPy sparse, serial.
 
     Returns ``(x, lam, iterations, reason_str, converged, seconds)``.  ``atol`` is the
-    absolute SNES tolerance on ‖F‖ (the caller scales it by the matrix size).
+    absolute SNES tolerance on ‖F‖ (the caller scales it by the matrix size).  A PETSc
+    error is raised as :class:`~meicp.core.errors.PetscSolveError`.
     """
     PETSc = import_petsc()
     n = A.shape[0]

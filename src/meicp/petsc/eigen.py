@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError
 from . import import_petsc, import_slepc
-from .comm import mpi_comm
 from .mat import ownership
 from .options import GHEP, OptionsScope
 

@@ -27,8 +27,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from . import import_petsc, import_slepc, mumps_c
-from .comm import mpi_comm
 from .mat import mat_from_local_csr, vec_to_numpy
 from .options import FLUTTER, OptionsScope, mumps_controls
 
@@ -64,8 +64,8 @@ def _with_basis_and_low_rank(defaults: dict, ncv: int | None, low_rank: float | 
 def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
     """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
     order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
-    (a DOF pair of the n form, i.e. a lattice node, when n is even: 1.6× fewer flops than
-    blocks of 2 at 3·10⁵ DOFs) — blocks of 2 when n is odd, since MUMPS returns a wrong
+    (a DOF pair of the n form, i.e. a lattice node, when n is even: fewer flops than blocks
+    of 2, docs/benchmarks-notes-layering.md) — blocks of 2 when n is odd, since MUMPS returns a wrong
     factor, without an error, when the order is not a multiple of the block.  ``low_rank``:
     MUMPS block-low-rank factor and solves (ICNTL(35) = 2) at that dropping tolerance
     (CNTL(7)); every pair is re-checked on (A, B) anyway (docs/flutter.md §4)."""
@@ -147,8 +147,8 @@ class SlidingPencilOps:
         scale = 1.0 / np.sqrt(d)
         scale_all = scale if comm is None else np.concatenate(comm.allgather(scale))
         lo, hi = self.A.getOwnershipRange()
-        # SciPy on the local rows: PETSc's A − Aᵀ (MatAYPX, different patterns) took twice as
-        # long at 10⁶ DOFs (1.4 s against 0.7 s)
+        # SciPy on the local rows: PETSc's A − Aᵀ (MatAYPX, different patterns) is slower
+        # (docs/benchmarks-notes-layering.md)
         AT = self.A.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() works in place
         try:
             AT_local = local_csr(AT)

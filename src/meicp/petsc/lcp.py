@@ -10,7 +10,8 @@ KKT conditions are exactly the LCP; TAO's TRON/BLMVM/GPCG solve it.
 
 Both are collective on the matrix's communicator: pass a PETSc Mat (distributed) or a
 SciPy matrix (used on ``COMM_SELF``).  Options live under ``-meicp_lcp_`` (``snes_*``,
-``ksp_*``, ``pc_*``, ``tao_*``) and can be overridden on the command line.
+``ksp_*``, ``pc_*``, ``tao_*``) and can be overridden on the command line.  This module
+registers them as the methods ``newton`` and ``tao`` of :func:`meicp.solve_lcp`.
 """
 
 from __future__ import annotations
@@ -18,10 +19,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..core.errors import ProblemError
+from ..core.errors import PetscSolveError, ProblemError
+from ..core.matrix import is_symmetric
+from ..lcp.problem import DEFAULT_TOL, LCPProblem, LCPResult, best_of, certify, refine_on_support
+from ..lcp.solve import register
 from . import import_petsc
 from .mat import mat_from_scipy, vec_to_numpy
-from .options import LCP, LU, configure_and_solve
+from .options import LCP, LU, configure_and_solve, petsc_errors
 
 PREFIX = LCP
 
@@ -37,6 +41,7 @@ def _petsc_operands(M, q, comm):
     return A, qv, owned
 
 
+@petsc_errors("SNES VI of the LCP")
 def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
             snes_type: str = "vinewtonrsls", options: dict | None = None):
     """Solve LCP(q, M) (bounds 0 ≤ x ≤ ∞) with SNES VI through :func:`snes_vi_affine`.
@@ -49,6 +54,7 @@ def snes_vi(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 200,
     return x, its, reason, seconds
 
 
+@petsc_errors("TAO of the LCP")
 def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
             tao_type: str = "tron", options: dict | None = None):
     """Solve LCP(q, M), M symmetric, as min ½xᵀMx + qᵀx over x ≥ 0 with TAO.  Returns
@@ -91,13 +97,37 @@ def tao_bqp(M, q, *, comm=None, tol: float = 1e-12, max_iter: int = 500,
     return out, its, reason, seconds
 
 
-def check_petsc_matrix(A) -> None:
-    """Square and finite, or ProblemError (collective)."""
-    m, n = A.getSize()
-    if m != n or m == 0:
-        raise ProblemError(f"M must be square and non-empty, got shape {(m, n)}")
-    if not np.isfinite(A.norm(import_petsc().NormType.FROBENIUS)):
-        raise ProblemError("M contains NaN or Inf")
+def _method(kind: str):
+    """The method ``kind`` (``newton``: :func:`snes_vi`; ``tao``: :func:`tao_bqp`) of
+    :func:`meicp.solve_lcp`: PETSc's iterate polished on its support and certified; a PETSc
+    error is a ``petsc_error`` status, not an exception."""
+    def run(problem: LCPProblem, *, tol: float = DEFAULT_TOL, comm=None, options=None,
+            max_iter: int | None = None, snes_type: str = "vinewtonrsls", tao_type: str = "tron",
+            **_ignored) -> LCPResult:
+        M = problem.M
+        if kind == "tao" and not problem.distributed and not is_symmetric(M, 1e-12):
+            raise ProblemError("tao solves the LCP as a QP and needs a symmetric M (use newton)")
+        try:
+            if kind == "tao":
+                x, its, reason, seconds = tao_bqp(M, problem.q, comm=comm, tol=min(tol, 1e-12),
+                                                  max_iter=max_iter or 500, tao_type=tao_type, options=options)
+            else:
+                x, its, reason, seconds = snes_vi(M, problem.q, comm=comm, tol=min(tol, 1e-12),
+                                                  max_iter=max_iter or 200, snes_type=snes_type, options=options)
+        except PetscSolveError as exc:  # e.g. TAO's line search on a QP that is unbounded below
+            return LCPResult(method=kind, status="petsc_error", message=f"PETSc error {exc.ierr}: {exc.line}")
+        result = LCPResult(method=kind, iterations=its, message=f"PETSc: {reason}")
+        result.timings["solve"] = seconds
+        converged = "CONVERGED" in reason
+        x = best_of(problem, x, refine_on_support(problem, x)) if converged else x
+        return certify(problem, result, x, tol=tol,
+                       failure_status="certificate_failed" if converged else "not_converged")
+    run.__name__ = kind
+    return register(kind)(run)
+
+
+newton = _method("newton")
+tao = _method("tao")
 
 
 def snes_vi_affine(J, q, lower, upper, *, comm=None, prefix: str = PREFIX, defaults: dict | None = None,

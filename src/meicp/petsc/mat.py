@@ -1,23 +1,27 @@
-"""Matrices as the solvers meet them: NumPy, SciPy sparse, or a distributed PETSc Mat.
+"""PETSc Mats: built from per-rank CSR rows, gathered back, and registered as a matrix kind.
 
 Distributed matrices are built from per-rank CSR rows: each rank's rows with NumPy/SciPy
-handed to ``createAIJ(csr=...)`` (docs/design.md §11: a Python ``setValues`` loop is 40× slower),
-and gathered back into SciPy.  :func:`is_petsc_mat`, :func:`max_abs_entry`,
-:func:`to_dense` and :func:`matvec` take any of the three kinds: one dispatch for the few
-operations every problem class needs.  Collective on the matrix's (or ``comm``'s)
-communicator when a PETSc Mat is involved.
+handed to ``createAIJ(csr=...)`` (a Python ``setValues`` loop is far slower: docs/design.md §11),
+and gathered back into SciPy.  Importing this module registers the PETSc Mat's
+implementations of the operations of :mod:`meicp.core.matrix` (``matvec``, ``to_dense``,
+``max_abs_entry``...), through :class:`PetscMat`, which recognises petsc4py's ``Mat`` by
+name so that registering does not start PETSc.  Collective on the matrix's (or ``comm``'s)
+communicator.
 """
 
 from __future__ import annotations
 
+import abc
 from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..core import validation
+from ..core import matrix
+from ..core.comm import mpi_comm
+from ..core.errors import ProblemError
 from . import import_petsc
-from .comm import mpi_comm, to_petsc_comm
+from .comm import to_petsc_comm
 
 
 def ownership(n: int, rank: int, size: int) -> tuple[int, int]:
@@ -97,55 +101,6 @@ def mat_from_rows(comm, local_rows: sp.csr_matrix, shape: tuple[int, int], local
     return A
 
 
-def is_petsc_mat(M) -> bool:
-    return type(M).__module__.startswith("petsc4py") and hasattr(M, "getSize")
-
-
-def row_max_abs(M) -> np.ndarray:
-    """``max_j |m_ij|`` for every row i, on every rank for a PETSc Mat (collective); NumPy and
-    SciPy matrices by :func:`meicp.core.validation.row_max_abs`."""
-    if not is_petsc_mat(M):
-        return validation.row_max_abs(M)
-    indptr, _, data = M.getValuesCSR()
-    local = np.zeros(len(indptr) - 1)
-    rows = np.repeat(np.arange(local.size), np.diff(indptr))
-    np.maximum.at(local, rows, np.abs(data))
-    return np.concatenate(M.getComm().tompi4py().allgather(local))
-
-
-def max_abs_entry(M) -> float:
-    """``max |m_ij|`` (0 for an empty or zero matrix); collective for a PETSc Mat."""
-    if is_petsc_mat(M):
-        _, _, data = M.getValuesCSR()
-        local = float(np.max(np.abs(data))) if data.size else 0.0
-        comm = mpi_comm(M.getComm())
-        return local if comm is None else max(comm.allgather(local))
-    data = M.data if sp.issparse(M) else np.asarray(M)
-    return float(np.max(np.abs(data))) if data.size else 0.0
-
-
-def to_dense(M) -> np.ndarray:
-    """A dense ndarray (gathered on every rank for a PETSc Mat)."""
-    if is_petsc_mat(M):
-        return mat_to_scipy(M).toarray()
-    return M.toarray() if sp.issparse(M) else np.asarray(M)
-
-
-def matvec(M, x: np.ndarray) -> np.ndarray:
-    """``M @ x`` for a full-length x (held on every rank for a PETSc Mat, collective)."""
-    if not is_petsc_mat(M):
-        return M @ x
-    X = M.createVecRight()
-    lo, hi = X.getOwnershipRange()
-    X.setArray(x[lo:hi])
-    Y = M.createVecLeft()
-    M.mult(X, Y)
-    out = vec_to_numpy(Y)
-    X.destroy()
-    Y.destroy()
-    return out
-
-
 def nonzeros(A, *, total: bool = True) -> dict:
     """PETSc's nonzero bookkeeping of an AIJ matrix, as ints: ``nz_used``, ``nz_allocated``,
     ``mallocs`` — summed over the ranks (``total``, collective) or this rank's part."""
@@ -171,7 +126,7 @@ def diagonal(A):
 def symmetric_part(M):
     """``(M + Mᵀ)/2``: SciPy in, SciPy out; a PETSc Mat in, a new PETSc Mat out (collective;
     the caller destroys it)."""
-    if not is_petsc_mat(M):
+    if not matrix.is_petsc_mat(M):
         M = sp.csr_matrix(M)
         return ((M + M.T) * 0.5).tocsr()
     PETSc = import_petsc()
@@ -186,7 +141,7 @@ def symmetric_part(M):
 def combination(X, alpha: float, Y):
     """``X + α·Y`` as a new matrix: SciPy in, SciPy out; PETSc Mats in, a new PETSc Mat out
     (collective; the caller destroys it)."""
-    if not is_petsc_mat(X):
+    if not matrix.is_petsc_mat(X):
         return (X + float(alpha) * Y).tocsr()
     PETSc = import_petsc()
     S = X.duplicate(copy=True)
@@ -204,3 +159,100 @@ def destroying(*objects):
         for obj in objects:
             if type(obj).__module__.startswith("petsc4py"):
                 obj.destroy()
+
+
+class PetscMat(abc.ABC):
+    """petsc4py's ``PETSc.Mat`` (and its subclasses), recognised by module and name: the
+    dispatch functions of :mod:`meicp.core.matrix` are registered against this class, so
+    that registering needs no petsc4py import (which would start PETSc before
+    :func:`~meicp.petsc.init` has the command line's options)."""
+
+    @classmethod
+    def __subclasshook__(cls, C):
+        if any(k.__name__ == "Mat" and k.__module__ == "petsc4py.PETSc" for k in C.__mro__):
+            return True
+        return NotImplemented
+
+
+# -- the PETSc Mat's implementations of meicp.core.matrix, collective on its communicator --
+
+@matrix.is_petsc_mat.register(PetscMat)
+def _is_petsc_mat(M) -> bool:
+    return True
+
+
+@matrix.matrix_shape.register(PetscMat)
+def _shape(M) -> tuple[int, int]:
+    return M.getSize()
+
+
+@matrix.matrix_comm.register(PetscMat)
+def _comm(M):
+    return mpi_comm(M.getComm())
+
+
+@matrix.checked_matrix.register(PetscMat)
+def _checked(M, name: str = "M"):
+    """Square, non-empty and finite (a norm: collective); the Mat itself, not a copy."""
+    m, n = M.getSize()
+    if m != n or m == 0:
+        raise ProblemError(f"{name} must be square and non-empty, got shape {(m, n)}")
+    if not np.isfinite(M.norm(import_petsc().NormType.FROBENIUS)):
+        raise ProblemError(f"{name} contains NaN or Inf")
+    return M
+
+
+@matrix.to_dense.register(PetscMat)
+def _to_dense(M) -> np.ndarray:
+    return mat_to_scipy(M).toarray()
+
+
+matrix.to_scipy.register(PetscMat, mat_to_scipy)
+
+
+@matrix.matvec.register(PetscMat)
+def _matvec(M, x: np.ndarray) -> np.ndarray:
+    X = M.createVecRight()
+    lo, hi = X.getOwnershipRange()
+    X.setArray(x[lo:hi])
+    Y = M.createVecLeft()
+    M.mult(X, Y)
+    out = vec_to_numpy(Y)
+    X.destroy()
+    Y.destroy()
+    return out
+
+
+@matrix.max_abs_entry.register(PetscMat)
+def _max_abs_entry(M) -> float:
+    _, _, data = M.getValuesCSR()
+    local = float(np.max(np.abs(data))) if data.size else 0.0
+    comm = mpi_comm(M.getComm())
+    return local if comm is None else max(comm.allgather(local))
+
+
+@matrix.row_max_abs.register(PetscMat)
+def _row_max_abs(M) -> np.ndarray:
+    indptr, _, data = M.getValuesCSR()
+    local = np.zeros(len(indptr) - 1)
+    rows = np.repeat(np.arange(local.size), np.diff(indptr))
+    np.maximum.at(local, rows, np.abs(data))
+    return np.concatenate(M.getComm().tompi4py().allgather(local))
+
+
+@matrix.is_symmetric.register(PetscMat)
+def _is_symmetric(M, rtol: float = 1e-12) -> bool:
+    """PETSc's own test, with its absolute tolerance made relative to max|M|."""
+    return bool(M.isSymmetric(rtol * _max_abs_entry(M)))
+
+
+@matrix.ldexp.register(PetscMat)
+def _ldexp(M, exponent: int):
+    out = M.duplicate(copy=True)
+    out.scale(2.0 ** exponent)
+    return out
+
+
+@matrix.release.register(PetscMat)
+def _release(M) -> None:
+    M.destroy()

@@ -23,8 +23,9 @@ import logging
 import re
 import sys
 import time
+from contextlib import contextmanager
 
-from ..core.errors import ProblemError
+from ..core.errors import PetscOptionError, PetscSolveError
 from . import given_options, import_petsc
 
 log = logging.getLogger("meicp.petsc")
@@ -79,18 +80,25 @@ ARGUMENT_ERRORS = (56, 60, 61, 62, 63, 75, 86)
 _RANK_TAG = re.compile(r"^\[\d+\]\s*")  # PETSc's "[0] " before each line of its error text
 
 
-class PetscOptionError(ProblemError):
-    """PETSc refused an option value (``ierr``: its error code)."""
-
-    def __init__(self, message: str, ierr: int | None = None):
-        super().__init__(message)
-        self.ierr = ierr
-
-
 def petsc_error_line(exc) -> str:
     """The last line of a PETSc error's text, without the rank tag (what went wrong)."""
     text = str(exc).strip()
     return _RANK_TAG.sub("", text.splitlines()[-1].strip()) if text else ""
+
+
+@contextmanager
+def petsc_errors(what: str):
+    """PETSc's own errors inside the block (or the decorated function) raised as
+    :class:`~meicp.core.errors.PetscSolveError` ("PETSc error <ierr> in <what>: <its last
+    line>"), so that callers outside ``meicp.petsc`` catch meicp's exceptions; a
+    :class:`PetscOptionError` and every other error pass untouched."""
+    PETSc = import_petsc()
+    try:
+        yield
+    except PETSc.Error as exc:
+        line = petsc_error_line(exc)
+        raise PetscSolveError(f"PETSc error {exc.ierr} in {what}" + (f": {line}" if line else ""),
+                              exc.ierr, line) from exc
 
 
 def set_from_options(obj, prefix: str, defaults=()) -> None:

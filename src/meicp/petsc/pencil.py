@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .mat import is_petsc_mat, mat_from_rows
+from ..core.matrix import is_petsc_mat
+from .mat import mat_from_rows
 
 
 def reduced_pencil(K, M, P, Q, retained: np.ndarray, P_B=None):

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import import_petsc, import_slepc
 from .mat import vec_to_numpy
-from .options import ACTIVE_SET, OptionsScope, report_unused
+from .options import ACTIVE_SET, OptionsScope, petsc_errors, report_unused
 
 
 class ReducedPencilSolver:
@@ -81,13 +81,15 @@ class ReducedPencilSolver:
         self.give_up = give_up
         self.gave_up = 0
 
+    @petsc_errors("a SLEPc eigen-solve of the reduced pencil")
     def solve(self, removed: np.ndarray, initial: np.ndarray | None = None, *,
               target: float | None = None, nev: int | None = None):
         """Converged real eigenpairs ``[(λ, ξ, relative_residual)]`` of the pencil without
         the ``removed`` DOFs (global indices, same on every rank), nearest the target first.
         ``target``/``nev`` override the configured ones for this solve (e.g. to follow one
         eigenpair with a shift at its previous eigenvalue).  ξ is a NumPy array on every
-        rank.  Collective."""
+        rank.  A PETSc or SLEPc error is raised as :class:`~meicp.core.errors.PetscSolveError`.
+        Collective."""
         PETSc = import_petsc()
         SLEPc = import_slepc()
         same = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
@@ -153,7 +155,7 @@ class ReducedPencilSolver:
         monitor, so the test reads this restart's Ritz values from the projected matrix itself
         (its eigenvalues are the monitor's, in the same restart); where the projected problem
         is stored compactly (a symmetric pencil) it uses the monitor's view of the previous
-        restart, one restart later (10⁶ DOFs: a restart of 8 to 16 solves, 2 s)."""
+        restart, one restart later (a restart's cost: docs/benchmarks-notes-layering.md)."""
         SLEPc = import_slepc()
         eps, seen = self.eps, {"hopeless": False, "restarts": 0}
         if eps.getST().getType() != SLEPc.ST.Type.SINVERT:  # another transform: no back-transform here

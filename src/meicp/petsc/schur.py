@@ -10,7 +10,7 @@ parallel only when the whole Schur index set is given on rank 0 ("MUMPS distribu
 Schur complements not yet supported from PETSc" otherwise): MUMPS then returns the Schur
 complement centralised on the host, a SeqDense on rank 0, which is broadcast.  The Schur
 complement comes without a residual: its error is measured by the caller
-(:func:`meicp.contact.divergence_proof.prove_no_divergence` probes it with :class:`MumpsFactor`).
+(:func:`meicp.contact.divergence.condensed.prove_no_divergence` probes it with :class:`MumpsFactor`).
 
 :class:`MumpsFactor` is the fallback and the solver of the probes and lifts: one MUMPS
 factorisation, ``Mat.matSolve`` on dense blocks.  Options under ``-meicp_schur_``.
@@ -23,19 +23,20 @@ import ctypes
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from . import import_petsc, mumps_c
-from .comm import mpi_comm, to_petsc_comm
+from .comm import to_petsc_comm
 from .mat import mat_from_local_csr, ownership
 from .options import SCHUR, OptionsScope, mumps_controls
 
 _C = None
 _MUMPS = {"pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 2}  # AMF ordering (no METIS in Debian's MUMPS)
 #: MUMPS' block-low-rank factorisation for the Schur complements, dropping at this relative
-#: threshold (ICNTL(35) = 2, CNTL(7)): at 10⁶ DOFs a Schur complement onto 2,000 rows took
-#: 2.5 s instead of 3.1 s and differed from the full-rank one by 1.6e-16 relative, rounding.
-#: 1e-12 was faster (2.3 s) but 4e-15 off — relative to the largest entry, which is of the
-#: ill-conditioned block Z: the measured error of G rose from 1.2e-12 to 4.1e-12 and the
-#: critical friction's exact bracket at 10⁶ DOFs widened to 2e-5.  Only where the error is
+#: threshold (ICNTL(35) = 2, CNTL(7)): faster than full rank and as accurate — it differed
+#: from the full-rank complement by 1.6e-16 relative, rounding.  1e-12 was faster still but
+#: 4e-15 off — relative to the largest entry, which is of the ill-conditioned block Z: the
+#: measured error of G rose from 1.2e-12 to 4.1e-12 and the critical friction's exact
+#: bracket at 10⁶ DOFs widened to 2e-5 (the timings: docs/benchmarks-notes-layering.md).  Only where the error is
 #: measured (:func:`schur_complement`'s callers probe it); the factors whose inertia is a
 #: proof (:class:`MumpsFactor`) stay full rank
 SCHUR_LOW_RANK = 1e-14
@@ -142,8 +143,8 @@ def dense_schur(comm, H: sp.spmatrix, rows: np.ndarray, *, symmetric: bool, opti
 def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
     """σ ↦ :func:`dense_schur` of the symmetric H₀ + σH₁ (one pattern, every rank holds both)
     onto ``rows``, with one MUMPS analysis for every σ (:class:`~meicp.petsc.mumps_c.SchurSeries`,
-    DMUMPS through its C interface: PETSc's interface analyses again at each σ, 0.56 s of 2.2 s
-    at 10⁶ DOFs, and its refactorisation returned a wrong Schur complement on 2 ranks); block
+    DMUMPS through its C interface: PETSc's interface analyses again at each σ (a quarter of
+    each complement's time, docs/benchmarks-notes-layering.md), and its refactorisation returned a wrong Schur complement on 2 ranks); block
     low-rank (:data:`SCHUR_LOW_RANK`) unless ``-meicp_schur_mat_mumps_*`` say otherwise.  Where
     no DMUMPS of a known version loads (:func:`~meicp.petsc.mumps_c.load` checks the version),
     one PETSc factorisation per σ.  The result has

@@ -3,8 +3,8 @@ the libraries themselves."""
 
 from __future__ import annotations
 
+from ..core.comm import comm_size
 from . import import_petsc, import_slepc
-from .comm import comm_size
 
 #: external solver packages worth reporting (PETSc's own names, case-insensitive)
 EXTERNAL_PACKAGES = ("MUMPS", "SuperLU_dist", "SuperLU", "SuiteSparse", "hypre")

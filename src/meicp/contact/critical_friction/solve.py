@@ -14,7 +14,7 @@ from ...core.machine import available_memory
 from ...lattice.model import LatticeModel
 from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
-from ...petsc.comm import mpi_comm
+from ...core.comm import mpi_comm
 from ...scene import Scene
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system

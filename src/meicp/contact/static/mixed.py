@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ...petsc.comm import mpi_comm
+from ...core.comm import mpi_comm
 from ...petsc.lcp import lu_solve, snes_vi_affine
 from ...petsc.options import STATIC, STATIC_POLISH
 from .data import StaticData

@@ -1,37 +1,29 @@
-"""The top of the divergence σ-window: an estimate of ``λ_max(sym A, sym B)`` by SLEPc.
+"""The largest Ritz value of a symmetric-definite pencil ``(sym A, sym B)`` by SLEPc's
+Krylov–Schur (Lanczos) — the adapter only; what it tells about the divergence σ-window is
+:mod:`meicp.contact.divergence.sigma_window`.
 
-Every MEiCP solution satisfies ``σ = xᵀsym(A)x / xᵀsym(B)x`` (complementarity gives
-``xᵀw = 0``), so no divergence mode lies above ``λ_max(sym A, sym B)``; the same bound holds
-for the real part of every eigenvalue of every support's pencil.  Krylov–Schur (Lanczos) on
-the symmetric-definite pencil finds it without a factorisation (B through its Jacobi
-"solve", exact for a lumped mass) when the top is isolated; when it sits in the cluster of
-slow vibrations near 0 Lanczos needs hundreds of restarts, so they are capped and the last
-Ritz value is returned.  A Ritz value is a *lower* estimate: the window claim is made by
-:func:`meicp.petsc.inertia.rayleigh_bound` (one LDLᵀ inertia), not here.  Options under
-``meicp_window_``.  Collective on the matrices' communicator.
+No factorisation: B through its Jacobi "solve" (exact for a lumped mass), a MUMPS Cholesky
+otherwise.  The restarts are capped and the largest Ritz value seen is returned when the run
+does not converge.  Options under ``meicp_window_``.  Collective on the matrices'
+communicator.
 """
 
 from __future__ import annotations
 
 import math
 
+from ..core.matrix import is_petsc_mat
 from . import import_petsc, import_slepc
 from .inertia import diagonal_minimum
-from .mat import is_petsc_mat, mat_from_scipy, symmetric_part
+from .mat import mat_from_scipy, symmetric_part
 from .options import WINDOW, OptionsScope
 
 
-#: residual tolerance of the top Ritz pair: a Ritz value of a symmetric-definite pencil is
-#: exact to about the square of its residual (10⁶ DOFs: θ to 1e-11 relative at 1e-5, with 32
-#: restarts instead of 53 at 1e-8), and the window is certified by an inertia 1e-3 above θ
-ESTIMATE_TOL = 1e-5
-
-
-def rayleigh_estimate(A, B, *, max_it: int = 60, tol: float = ESTIMATE_TOL,
-                      options: dict | None = None) -> tuple[float, bool, int]:
-    """``(θ, converged, restarts)``: θ the largest Ritz value of ``(sym A, sym B)`` seen (a
-    lower estimate of λ_max; its residual below ``tol`` when ``converged``; nan when SLEPc fails).  A, B: SciPy (solved on
-    this process) or PETSc Mats."""
+def largest_ritz_value(A, B, *, max_it: int, tol: float, options: dict | None = None) -> tuple[float, bool, int]:
+    """``(θ, converged, restarts)``: θ the largest Ritz value of ``(sym A, sym B)`` seen in at
+    most ``max_it`` restarts (its residual below ``tol`` when ``converged``; nan when SLEPc
+    fails, e.g. a breakdown of the B-inner product).  A, B: SciPy (solved on this process) or
+    PETSc Mats."""
     PETSc, SLEPc = import_petsc(), import_slepc()
     SA, SB = symmetric_part(A), symmetric_part(B)
     if not is_petsc_mat(SA):

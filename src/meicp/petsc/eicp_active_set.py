@@ -16,7 +16,8 @@ violated index only), and when those revisit too the search stops with status
 
 What the search proves: a returned solution is a certified solution; a failure proves
 nothing about existence — ``coverage`` lists the supports visited, and the message says so.
-Collective on the matrices' communicator; SciPy input runs on ``COMM_SELF``.
+Collective on the matrices' communicator; SciPy input runs on ``COMM_SELF``.  Registered
+as the method ``active-set`` of :func:`meicp.solve_eicp`.
 """
 
 from __future__ import annotations
@@ -25,14 +26,15 @@ import time
 
 import numpy as np
 
+from ..core.errors import PetscOptionError, PetscSolveError
+from ..core.matrix import is_symmetric
 from ..core.progress import Progress
-from ..core.validation import is_symmetric
-from ..petsc import import_petsc
-from ..petsc.mat import mat_from_scipy
-from ..petsc.options import ACTIVE_SET, ARGUMENT_ERRORS, PetscOptionError, petsc_error_line
-from ..petsc.reduced_pencil import ReducedPencilSolver
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
-from .scaling import normalised, restore, scaled_value
+from ..eicp.problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair, lam_floor
+from ..eicp.scaling import normalised, restore, scaled_value
+from ..eicp.solve import register
+from .mat import mat_from_scipy
+from .options import ACTIVE_SET, ARGUMENT_ERRORS
+from .reduced_pencil import ReducedPencilSolver
 
 
 def _petsc_pair(problem: EiCPProblem, comm):
@@ -42,9 +44,6 @@ def _petsc_pair(problem: EiCPProblem, comm):
 
 
 def _is_symmetric(problem: EiCPProblem) -> bool:
-    if problem.distributed:
-        a, b = problem.scales()
-        return bool(problem.A.isSymmetric(1e-13 * a) and problem.B.isSymmetric(1e-13 * max(b, 1e-300)))
     return is_symmetric(problem.A, 1e-13) and is_symmetric(problem.B, 1e-13)
 
 
@@ -56,6 +55,7 @@ def _spurious_value(problem: EiCPProblem, target: float) -> float:
     return target - 1e3 * (a / max(b, 1e-300)) * max(1.0, problem.n ** 0.5) - 1e3 * abs(target) - 1.0
 
 
+@register("active-set")
 def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
                lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
                options: dict | None = None, prefix: str = ACTIVE_SET, follow: bool = True,
@@ -95,7 +95,6 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     status, message = "max_iterations", f"no certified solution within {max_iter} support updates"
     single_moves = False
     initial = None
-    PETSc = import_petsc()
     # the search ends at the first clean support, so max_iter is a bound, not a count
     progress = Progress(f"active-set search (at most {max_iter} support updates)", unit="eigen-solves")
     try:
@@ -121,7 +120,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                                          target=prev - 1e-8 * max(abs(prev), scales[0] / max(scales[1], 1e-300)))
                 else:
                     pairs = solver.solve(removed, initial)
-            except (PETSc.Error, PetscOptionError) as exc:  # e.g. a singular shifted matrix at the target
+            except (PetscSolveError, PetscOptionError) as exc:  # e.g. a singular shifted matrix at the target
                 status, message = "petsc_error", _petsc_error_message(exc, it, S.size, prefix)
                 option_error = isinstance(exc, PetscOptionError)
                 break
@@ -186,13 +185,12 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
 def _petsc_error_message(exc, it: int, support: int, prefix: str) -> str:
     """What went wrong, with PETSc's own last line, and the hint that fits the error: a bad
     option value (``-meicp_as_eps_tol abc``) is not cured by another target."""
-    where = f"SLEPc/PETSc error {getattr(exc, 'ierr', '?')} in eigen-solve {it} (support of size {support})"
+    where = f"SLEPc/PETSc error {exc.ierr} in eigen-solve {it} (support of size {support})"
     if isinstance(exc, PetscOptionError):  # set_from_options named the prefix and the options given
         return f"{where}: {exc}"
-    line = petsc_error_line(exc)
-    detail = f": {line}" if line else ""
+    detail = f": {exc.line}" if exc.line else ""
     hint = (f"check the -{prefix}* options and the [petsc] table (a value PETSc cannot use)"
-            if getattr(exc, "ierr", None) in ARGUMENT_ERRORS
+            if exc.ierr in ARGUMENT_ERRORS
             else f"a different target (-{prefix}eps_target) may avoid it")
     return f"{where}{detail}; {hint}"
 

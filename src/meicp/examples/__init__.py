@@ -1,26 +1,41 @@
-"""The benchmarks' scene: two bonded layers, a soft one (k = 1, ρ = 1) under a stiff one
-(k = 5, ρ = 2), as in ``data/scenes/two_layers.toml`` — built in one place, checked by the
-same parser as a scene file."""
+"""Ready-made scenes for tests, benchmarks and studies.
+
+:func:`two_layer_scene` builds the project's one example lattice — two bonded layers, a
+soft one (k = 1, ρ = 1) under a stiff one (k = 5, ρ = 2), as in
+``data/scenes/two_layers.toml`` — at any size, through the same parser as a scene file, so a
+built scene is checked exactly as a written one.  :func:`with_friction` sets every friction
+coefficient of a scene at once, for studies across μ.  :mod:`meicp.examples.failure_map`
+holds the failure map's small problems and their brute-force references.
+
+    from meicp.examples import two_layer_scene
+    scene = two_layer_scene(60, (2, 2), mu=1.5, states="slip+", shear=0.5)
+"""
 
 from __future__ import annotations
 
-import math
+import dataclasses
 
-from meicp.io.scene import scene_from_dict
+from ..io.scene import scene_from_dict
+from ..scene import Scene
+
+__all__ = ["two_layer_scene", "with_friction"]
 
 
 def two_layer_scene(nx: int, rows: tuple[int, int], *, mu: float | None = None, states="slip+",
                     shear: float = 0.0, load=None, spacing: float = 1.0, stiffness=(1.0, 5.0),
                     density=(1.0, 2.0), top: str = "fixed", bottom: str = "contact", sides: str = "free",
                     interface: dict | None = None, solver: dict | None = None, petsc: dict | None = None,
-                    title: str = ""):
+                    title: str = "") -> Scene:
     """A :class:`~meicp.scene.Scene`: ``nx`` columns, ``rows = (lower, upper)`` node rows of
     layer A (``stiffness[0]``, ``density[0]``) under layer B; boundary ``top`` / ``bottom`` /
     ``sides`` (left and right).  On a rough base (``bottom = "contact"``) the contacts have
     friction ``mu`` and ``states`` (one state, a list, or ``"solve"``).  ``load``: the
     prescribed top-row displacement ``(ux, uy)``; ``interface``: the A/B interface's table
     (e.g. ``{"kind": "frictional", "friction": 0.3, "states": "stick"}``); ``solver``,
-    ``petsc``: the scene's ``[solver]`` and ``[petsc]`` tables."""
+    ``petsc``: the scene's ``[solver]`` and ``[petsc]`` tables.
+
+    ``two_layer_scene(5, (2, 2), mu=3.0, load=(0.06, -0.1), petsc={"eps_tol": 1e-10})`` is
+    ``data/scenes/two_layers.toml`` (tests/test_examples.py checks it)."""
     lower, upper = rows
     d = {"lattice": {"nx": nx, "spacing": spacing, "shear": shear},
          "layers": [{"name": "A", "rows": lower, "stiffness": stiffness[0], "density": density[0]},
@@ -41,15 +56,10 @@ def two_layer_scene(nx: int, rows: tuple[int, int], *, mu: float | None = None, 
     return scene_from_dict(d, source=title or f"two-layer lattice {nx} x {lower + upper}")
 
 
-def lattice_shape(dofs: int) -> tuple[int, int]:
-    """``(nx, ny)`` with nx = 2·ny and about ``dofs`` DOFs; 10^6 exactly is 1000 × 500 (the
-    lattice of data/scenes/extensive.toml)."""
-    if dofs == 1_000_000:
-        return 1000, 500
-    ny = max(2, 2 * round(math.sqrt(dofs / 4) / 2))
-    return 2 * ny, ny
-
-
-def halves(ny: int) -> tuple[int, int]:
-    """``ny`` rows split into (lower, upper), the lower layer the thinner when ny is odd."""
-    return ny // 2, ny - ny // 2
+def with_friction(scene: Scene, mu: float) -> Scene:
+    """``scene`` with friction ``mu`` on the rough base and on every frictional interface,
+    everything else (states included) unchanged."""
+    contact = dataclasses.replace(scene.contact, friction=mu) if scene.contact else None
+    interfaces = tuple(dataclasses.replace(i, friction=mu) if i.kind == "frictional" else i
+                       for i in scene.interfaces)
+    return dataclasses.replace(scene, contact=contact, interfaces=interfaces)

@@ -4,32 +4,32 @@ tests"):
 
     T1  σ = 0      G(0) ∈ R₀: a positive diagonal D with sym(DG(0)) ≻ 0 (one condensation)
     T2  windows    G(σ) ∈ R₀ for every σ in [0, σ_max], by certificates on windows
-                   [σ_a, σ_b] from condensations at their ends (:mod:`.windows`)
+                   [σ_a, σ_b] from condensations at their ends (:mod:`.windows`, :mod:`.cover`)
 
-(G(σ) of :mod:`.condensation`; the certificates of :mod:`meicp.lcp.certificates`.)  Every
+(G(σ) of :mod:`meicp.contact.condensation`; the certificates of :mod:`meicp.lcp.certificates`.)  Every
 certificate is decided with its rounding margin (the dense eigen-solve's and the
 condensation's error) and a caller's relative ``tol``: a borderline case is not proved.
 
-The condensations are those of :class:`.condenser.Condenser` (MUMPS: solves with a bounded
+The condensations are those of :class:`meicp.contact.condenser.Condenser` (MUMPS: solves with a bounded
 error, or Schur complements with a measured one).  Collective on ``comm``; the dense
 certificates run on rank 0, the other ranks serve its condensations.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..lcp.certificates import optimise_scaling, pd_certificate
-from ..petsc.comm import mpi_comm
-from .condenser import Condenser
-from .on_root import on_root
-from .windows import cover
+from ...core.comm import mpi_comm
+from ...lcp.certificates import optimise_scaling, pd_certificate
+from ..condenser import Condenser
+from ..on_root import on_root
+from .cover import Cover, cover
 
 
 @dataclass(frozen=True)
-class DivergenceProof:
+class CondensedProof:
     """What :func:`prove_no_divergence` established.
 
     proved: True only if no MEiCP solution has σ in ``window`` (the whole asked window);
@@ -51,7 +51,7 @@ class DivergenceProof:
 
 
 def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, method: str = "auto",
-                        max_samples: int = 16) -> DivergenceProof:
+                        max_samples: int = 16) -> CondensedProof:
     """Prove that the MEiCP of ``pencil`` has no solution with σ in [0, σ_max].
 
     comm: the communicator (None: serial); collective.  pencil: a
@@ -61,7 +61,7 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     an inertia of sym(σ_max B − A)); 0 asks for σ = 0 only; ``inf`` is allowed (the last
     window is [σ_a, ∞)).  tol: relative margin every certificate must clear on top of its
     rounding allowance.  method: ``"schur"``, ``"solves"`` or ``"auto"``
-    (:mod:`.condenser`).  max_samples: condensations allowed for the windows.
+    (:mod:`meicp.contact.condenser`).  max_samples: condensations allowed for the windows.
 
     Contract: ``proved=True`` is a proof (every certificate re-checked with its margin; with
     the Schur method the condensation error is measured, as the statement says);
@@ -75,18 +75,18 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     if not (sigma_max >= 0):
         raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
     if np.asarray(pencil.J).size == 0:
-        return DivergenceProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
+        return CondensedProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
     with Condenser.of(pencil, comm, method=method) as cond:
         return _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start)
 
 
-def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> DivergenceProof:
+def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedProof:
     if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
-        return DivergenceProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
+        return CondensedProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
                                "mass); this pencil couples contact and free DOFs through its mass (a frictional "
                                "interface): only σ = 0 can be certified, the window is undecided", np.nan, 0, ())
     if not cond.prepare(need_tau=sigma_max > 0):
-        return DivergenceProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
+        return CondensedProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()
     if comm is None or comm.Get_size() == 1:
         out = on_root(comm, lambda: _decide(cond.at, cond.sharper_tau, sigma_max, cond.tau, tol, max_samples,
@@ -113,8 +113,7 @@ def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> Divergence
                     continue
         out = on_root(comm, decide)
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
-    proved, test, statement, margin, samples, window = out
-    return DivergenceProof(proved, test, f"{statement}; {cond.error_text()}", margin, samples, window, secs)
+    return replace(out, statement=f"{out.statement}; {cond.error_text()}", seconds=secs)
 
 
 #: the request, served like a σ, that certifies the λ_min estimate as τ (:meth:`Condenser.sharper_tau`)
@@ -125,30 +124,32 @@ def _serve(cond: Condenser, request):
     return cond.sharper_tau() if request == SHARPER_TAU else cond.at(request)
 
 
-def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=None):
-    """T1 then T2 on rank 0: ``(proved, test, statement, margin, samples, window)``."""
+def _decide(condense_at, sharper_tau, sigma_max, tau, tol, max_samples, scale=None) -> CondensedProof:
+    """T1 then T2 on rank 0 (the statement without the condensation's error, no seconds)."""
     c0 = condense_at(0.0)
     G0 = c0.G()
     d, _ = optimise_scaling([G0], iters=40)
     cert = pd_certificate(G0, c0.error(), d, tol=tol)
     if not cert.proved:
-        return (False, "", f"σ = 0 not excluded: no diagonal scaling D found with sym(DG(0)) ≻ 0 beyond rounding "
-                f"(margin {cert.margin:.2e})", cert.margin, 1, ())
+        return CondensedProof(False, "", f"σ = 0 not excluded: no diagonal scaling D found with sym(DG(0)) ≻ 0 "
+                              f"beyond rounding (margin {cert.margin:.2e})", cert.margin, 1, ())
     if sigma_max == 0:
-        return (True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
-                f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1, (0.0, 0.0))
-    cov = cover(condense_at, 1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale,
-                sharper_tau=sharper_tau, scalings={0.0: d})
+        return CondensedProof(True, "condensed-pd", f"G(0) ∈ R₀: sym(DG(0)) ≻ 0 for a positive diagonal D (λ_min "
+                              f"{cert.lam_min:.3e} > rounding {cert.rounding:.1e}): no σ = 0 mode", cert.margin, 1,
+                              (0.0, 0.0))
+    settings = Cover(1.0, tau, sigma_max=sigma_max, max_samples=max_samples, d_seed=d, tol=tol, scale=scale)
+    cov = cover(condense_at, settings, sharper_tau=sharper_tau, scalings={0.0: d})
     n = len(cov.samples)
     if cov.proved:
         margin = min([cert.margin] + [w[2] for w in cov.windows])
         split = f", split at the scale {scale:.3g}" if scale and scale > cov.tau else ""
-        return (True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] ({len(cov.windows)} "
-                f"windows, {n} condensations, τ = {cov.tau:.3g} certified{split})", margin, n, (0.0, float(sigma_max)))
+        return CondensedProof(True, "condensed-windows", f"G(σ) ∈ R₀ on every window of [0, {sigma_max:.6g}] "
+                              f"({len(cov.windows)} windows, {n} condensations, τ = {cov.tau:.3g} certified{split})",
+                              margin, n, (0.0, float(sigma_max)))
     covered = 0.0
     for a, b, *_ in sorted(cov.windows):
         if a <= covered:
             covered = max(covered, b)
     a, b, m = cov.failed
-    return (False, "", f"window [{a:.6g}, {b:.6g}] not certified (margin {m:.2e}) after {n} condensations; "
-            f"proved free of modes: [0, {covered:.6g}]", m, n, (0.0, float(covered)))
+    return CondensedProof(False, "", f"window [{a:.6g}, {b:.6g}] not certified (margin {m:.2e}) after {n} "
+                          f"condensations; proved free of modes: [0, {covered:.6g}]", m, n, (0.0, float(covered)))

@@ -8,7 +8,8 @@ Niu set a plain semismooth approach solves 2 of 6 from the given x0), so non-con
 is reported as such, and a "converged" SNES whose iterate fails :func:`certify_pair`
 is reported as ``certificate_failed`` — never as a solution.
 
-The system, its normalisation and the PETSc details are in :mod:`meicp.petsc.eicp_vi`.
+The system, its normalisation and the PETSc details are in :mod:`meicp.petsc.eicp_vi`; this
+module registers the method as ``semismooth`` of :func:`meicp.solve_eicp`.
 With J ≠ ∅ the normalisation ``eᵀx_J = 1`` means only solutions with ``x_J ≠ 0`` are sought.
 """
 
@@ -18,18 +19,18 @@ import time
 
 import numpy as np
 
-from ..core.errors import ProblemError
-from ..petsc import import_petsc
-from ..petsc.comm import comm_size
-from ..petsc.eicp_vi import snes_vi_eicp
-from ..petsc.mat import mat_to_scipy
-from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
-from .scaling import normalised, restore, scaled_value
+from ..core.errors import PetscSolveError, ProblemError
+from ..core.matrix import matrix_comm, to_scipy
+from ..eicp.problem import DEFAULT_TOL, EiCPProblem, EiCPResult, certify_pair
+from ..eicp.scaling import normalised, restore, scaled_value
+from ..eicp.solve import register
+from .eicp_vi import snes_vi_eicp
 
 #: SNES stops when ‖F‖₂ ≤ ATOL_FACTOR · (matrix scale); the certificate then decides
 ATOL_FACTOR = 1e-13
 
 
+@register("semismooth")
 def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=None,
                max_iter: int = 200, snes_type: str = "vinewtonrsls", options: dict | None = None,
                lam_min: float | None = None, **_) -> EiCPResult:
@@ -71,14 +72,12 @@ def semismooth(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, x0=None, lam0=
         return _no_start(t0, snes_type, f"the start eigenvalue x0ᵀAx0 / x0ᵀBx0 = {lam_start} is not finite: "
                          "give lam0")
     scales = problem.scales()
-    PETSc = import_petsc()
     try:
         x, lam, its, reason, converged, seconds = snes_vi_eicp(
             A, B, problem.J, x_start, lam_start, atol=ATOL_FACTOR * max(scales[0], scales[1], 1.0),
             max_iter=max_iter, snes_type=snes_type, options=options)
-    except PETSc.Error as exc:  # e.g. MUMPS on an exactly singular bordered Jacobian
-        result = _no_start(t0, snes_type, f"PETSc error {getattr(exc, 'ierr', '?')} in SNES {snes_type}: "
-                           + str(exc).strip().splitlines()[-1].strip())
+    except PetscSolveError as exc:  # e.g. MUMPS on an exactly singular bordered Jacobian
+        result = _no_start(t0, snes_type, f"PETSc error {exc.ierr} in SNES {snes_type}: {exc.line}")
         result.status = "petsc_error"
         return result
     result = EiCPResult(method="semismooth", iterations=its,
@@ -124,10 +123,10 @@ def _serial_pencil(problem: EiCPProblem):
     """A, B as ndarray / CSR; a PETSc Mat is gathered only when it lives on one rank."""
     if not problem.distributed:
         return problem.A, problem.B
-    if comm_size(problem.A.getComm()) > 1:
+    if matrix_comm(problem.A) is not None:
         raise ProblemError("semismooth runs serially: pass NumPy/SciPy matrices or a Mat on "
                            "one rank")
-    return mat_to_scipy(problem.A), mat_to_scipy(problem.B)
+    return to_scipy(problem.A), to_scipy(problem.B)
 
 
 def _start_vector(problem: EiCPProblem, B, x0) -> np.ndarray | None:

@@ -1,0 +1,141 @@
+"""The SLEPc active-set search for a divergence mode from the top of the σ-window
+(:mod:`meicp.eicp.active_set`).
+
+Its shift sits at an estimate of λ_max(sym A, sym B), which bounds the real part of every
+eigenvalue of every support's pencil, so the first pair it takes is the rightmost eigenvalue
+of the full support S = J — never the slow vibrations clustered just below 0 that a shift at
+0 returns; each support update follows that pair.  A returned mode is certified on the whole
+reduced problem.  The first search is short (``FIRST_SEARCH`` support updates,
+``FIRST_EPS_MAX_IT`` restarts each, given up after ``FIRST_GIVE_UP`` restarts when every Ritz
+value estimates an eigenvalue below 0); the whole search, with the caller's budget, comes
+only after the condensed proof stopped.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, replace
+
+from ...core.errors import PetscOptionError
+from ...eicp.solve import solve_eicp
+from .modes import FoundModes, certified_modes
+
+#: support updates of the first, short search from the window's top (before the proof), and
+#: the Krylov–Schur restarts each of its eigen-solves may take: a rightmost eigenvalue that is
+#: a mode stands apart and converges in a few, while one inside the cluster of slow vibrations
+#: is no mode and costs the most (docs/benchmarks-notes.md, "first search")
+FIRST_SEARCH = 3
+FIRST_EPS_MAX_IT = 6
+#: ... and it gives up after this many restarts when every Ritz value estimates an eigenvalue
+#: below 0: on a stable lattice all sit in the cluster of slow vibrations from the first
+#: restart on, while a mode shows above 0 at once (docs/benchmarks-notes.md, "first search");
+#: the proof, or the whole search after it, decides
+FIRST_GIVE_UP = 1
+
+log = logging.getLogger("meicp")
+
+
+@dataclass(frozen=True)
+class Tally:
+    """Supports visited and eigen-solves made by the searches so far."""
+
+    supports_visited: int = 0
+    eigen_solves: int = 0
+
+    def after(self, eicp) -> Tally:
+        return Tally(self.supports_visited + int(eicp.coverage.get("supports_visited", 0)),
+                     self.eigen_solves + int(eicp.coverage.get("eigen_solves", 0)))
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """One pencil's search: its keywords for :func:`~meicp.eicp.solve.solve_eicp` (``target``,
+    ``nev``, ``options``, the caller's own), the whole search's budget of support updates
+    (None: the solver's default), and the clock of the verdict (for the log)."""
+
+    pen: object
+    comm: object
+    lam_min: float
+    tol: float
+    keywords: dict
+    full_budget: int | None
+    started: float
+
+    @property
+    def target(self) -> float:
+        return self.keywords["target"]
+
+    @property
+    def first_budget(self) -> int:
+        """Support updates of the first search: FIRST_SEARCH, or fewer when the whole budget is."""
+        return FIRST_SEARCH if self.full_budget is None else min(FIRST_SEARCH, self.full_budget)
+
+    @property
+    def whole_search_left(self) -> bool:
+        """Whether the whole budget exceeds the first search's."""
+        return self.full_budget is None or self.full_budget > self.first_budget
+
+    def from_top(self, sigma_max: float) -> SearchSettings:
+        """The same search from a certified σ_max."""
+        return replace(self, keywords={**self.keywords, "target": sigma_max})
+
+
+def search_settings(pen, scene, comm, lam_min: float, tol: float, options, shift: float,
+                    started: float) -> SearchSettings:
+    """The caller's keywords, completed: the shift at the estimated top of the window (the
+    top is the short run's Ritz value: placing the shift needs no certificate), the scene's
+    ``nev`` and ``[petsc]`` options; ``max_iter`` (else the scene's) is the whole budget."""
+    keywords = dict(options)
+    keywords.setdefault("target", shift)
+    keywords.setdefault("nev", scene.solver.nev or 1)
+    keywords.setdefault("options", dict(scene.petsc))
+    full_budget = keywords.pop("max_iter", scene.solver.max_iterations or None)
+    return SearchSettings(pen, comm, lam_min, tol, keywords, full_budget, started)
+
+
+@dataclass(frozen=True)
+class SearchOutcome:
+    """One search: the EiCP result, the tally of every search so far, its certified modes,
+    and the shift it started from."""
+
+    eicp: object
+    tally: Tally
+    modes: FoundModes
+    target: float
+
+    @property
+    def found(self) -> bool:
+        return bool(self.modes.found)
+
+
+def search(settings: SearchSettings, before: Tally, max_iter: int | None, *, first: bool = False) -> SearchOutcome:
+    """One active-set search with at most ``max_iter`` support updates (None: the solver's
+    default); ``first``: the short search's restarts and its giving up.  A ``[petsc]`` or
+    command-line value PETSc rejects is bad input: PetscOptionError."""
+    pen = settings.pen
+    budget = {} if max_iter is None else {"max_iter": max_iter}
+    if first:
+        budget["options"] = {"eps_max_it": FIRST_EPS_MAX_IT, **settings.keywords["options"]}
+        budget["give_up_after"] = FIRST_GIVE_UP
+    eicp = solve_eicp(pen.A, pen.B, J=pen.maps.J, method="active-set", lam_min=0.0, tol=settings.tol,
+                      comm=settings.comm, **{**settings.keywords, **budget})
+    if eicp.coverage.get("option_error"):
+        raise PetscOptionError(eicp.message)
+    got = certified_modes(eicp, pen, settings.lam_min)
+    log.info("divergence: search from σ = %.6g, %d mode(s), %s Krylov–Schur restart(s)%s (%.2f s)",
+             settings.target, len(got.found), eicp.coverage.get("eps_iterations", "?"),
+             ", given up: no Ritz value above 0" if eicp.coverage.get("gave_up") else "",
+             time.perf_counter() - settings.started)
+    return SearchOutcome(eicp, before.after(eicp), got, settings.target)
+
+
+def first_search(settings: SearchSettings) -> SearchOutcome:
+    """The short search from the window's top: a mode on the full support, or one support
+    update away, is found at once."""
+    return search(settings, Tally(), settings.first_budget, first=True)
+
+
+def whole_search(settings: SearchSettings, before: Tally) -> SearchOutcome:
+    """The search with its whole budget, after the proofs stopped."""
+    return search(settings, before, settings.full_budget)
