@@ -89,8 +89,7 @@ import scipy.sparse.linalg as spla
 import bench_eicp
 import meicp
 from bench_common import (MUMPS_ORDER_NAME, Stage, csv_path, lattice_shape, release_memory, rss_bytes,
-                          slepc_eigensolve,
-                          write_rows)
+                          slepc_eigensolve, write_rows)
 from meicp.contact import pencil
 from meicp.contact.maps import contact_sets
 from meicp.contact.problem import pencil_of
