@@ -56,7 +56,7 @@ def test_distributed_assembly_equals_serial(comm, name):
 @pytest.mark.parametrize("name", [n for n, _ in scenes()])
 def test_the_whole_matrices_gathered_on_every_rank_are_the_serial_assembly(comm, name):
     """What ``LatticeMatrices.whole`` hands the condenser and the static equilibrium on several
-    ranks: the serial assembly's CSR arrays exactly (no second assembly)."""
+    ranks: the serial assembly's CSR arrays exactly, the same on every rank."""
     from meicp.petsc.assembly import LatticeMatrices
 
     scene = dict(scenes())[name]

@@ -128,7 +128,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 result.sizes = {"dofs": model.n_dofs, "retained": int(red.retained.size),
                                 "complementarity": int(red.J.size)}
                 log.info("MEiCP: %d retained DOFs, %d complementarity pairs%s", red.retained.size, red.J.size,
-                         f", grazing case {case}" if case else "")
+                         f", grazing case {tuple((s, i, c.value) for s, i, c in case)}" if case else "")
                 if red.retained.size == 0:
                     verdicts.append(all_held())
                     continue

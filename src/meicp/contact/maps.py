@@ -19,9 +19,10 @@ numbering, and the pencil is ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (B is diago
 contact with lumped M, and nonsymmetric once an interface couples u_lower and d).
 
 μ stays data: :class:`ReducedSystem` keeps the friction-free rows P̃₀, the unit-friction rows
-P̃₁ (one ``e_nᵀ`` per slip row) and the μ of each row, and forms ``P̃ = P̃₀ + diag(μ)·P̃₁`` in
-one place (:meth:`ReducedSystem.rows_at`); the critical friction (μ as the eigenvalue), the
-friction range (μ scaled) and the condensation's friction part read P̃₀, P̃₁ and μ directly.
+P̃₁ (one ``e_nᵀ`` per slip row) and the μ of each complementarity row (the only rows friction
+enters), and forms ``P̃ = P̃₀ + diag(μ)·P̃₁`` in one place (:meth:`ReducedSystem.rows_at`);
+the critical friction (μ as the eigenvalue), the friction range (μ scaled) and the
+condensation's friction part read P̃₀, P̃₁ and μ directly.
 
 Retained DOFs are ordered by their natural DOF number, so a distributed layout that
 follows the lattice's row bands keeps each reduced DOF on the rank of its node.
@@ -32,7 +33,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -51,10 +51,11 @@ class ReducedSystem:
     """The maps of one assignment of states, μ kept as data.  Q (n × r) and the rows
     ``P̃ = P₀ + diag(μ)·P₁`` (r × n) in natural numbering: ``P0`` the friction-free rows (unit
     rows, ``s·e_tᵀ`` for a slip DOF), ``P1`` the unit-friction rows (``e_nᵀ`` in the row of each
-    slip DOF, zero rows elsewhere), ``mu`` the μ of each row (its contact line's for a slip
-    row, 0 elsewhere).  ``retained`` the natural DOF of each reduced DOF (sorted), ``J`` the
-    complementarity positions, ``pair_of`` for each J position: (contact line name, contact
-    index, ``"t"`` or ``"n"``)."""
+    slip DOF, zero rows elsewhere), ``mu`` the μ of the row of each J position (its contact
+    line's for a slip row, 0 for a grazing contact's normal row; every other row has none, so
+    the vector over all r rows is only formed when P̃ is).  ``retained`` the natural DOF of each
+    reduced DOF (sorted), ``J`` the complementarity positions, ``pair_of`` for each J position:
+    (contact line name, contact index, ``"t"`` or ``"n"``)."""
 
     Q: sp.csr_matrix
     P0: sp.csr_matrix
@@ -65,15 +66,15 @@ class ReducedSystem:
     pair_of: list = field(default_factory=list)
     grazing_case: tuple = ()
 
-    @cached_property
+    @property
     def P(self) -> sp.csr_matrix:
-        """P̃ with each contact line's own μ (formed once per reduced system)."""
+        """P̃ with each contact line's own μ (formed when asked: the pencil reads it once)."""
         return self.rows_at()
 
     def friction_rows(self, mu=None) -> sp.csr_matrix:
         """``diag(μ)·P₁``: the part of P̃ proportional to friction (``mu``: None for each line's
         own μ, a number for every contact at that μ)."""
-        return (sp.diags(self._mu(mu)) @ self.P1).tocsr()
+        return (sp.diags(self._row_mu(mu)) @ self.P1).tocsr()
 
     def rows_at(self, mu=None) -> sp.csr_matrix:
         """``P̃ = P₀ + diag(μ)·P₁``, the one place it is formed (``mu`` as for
@@ -82,12 +83,16 @@ class ReducedSystem:
 
     def with_friction(self, mu: float) -> "ReducedSystem":
         """These maps with every contact at friction ``mu`` (the same states and DOFs)."""
-        return dataclasses.replace(self, mu=self._mu(mu))
+        return dataclasses.replace(self, mu=self._row_mu(mu)[self.J])
 
-    def _mu(self, mu) -> np.ndarray:
+    def _row_mu(self, mu) -> np.ndarray:
+        """μ of every row of P̃: each line's own (``mu`` None), or ``mu`` in every slip row."""
+        rows = np.zeros(self.P0.shape[0])
         if mu is None:
-            return self.mu
-        return np.where(np.diff(self.P1.indptr) > 0, float(mu), 0.0)
+            rows[self.J] = self.mu
+        else:
+            rows[np.diff(self.P1.indptr) > 0] = float(mu)
+        return rows
 
 
 def grazing_cases(lines: list[ContactLine]):
@@ -156,15 +161,15 @@ def reduced_system(model, lines: list[ContactLine], grazing_case: tuple = ()) ->
     slip = np.array(list(row_extra), dtype=np.int64)
     normal = np.array([nn for nn, _ in row_extra.values()], dtype=np.int64)
     P1 = sp.csr_matrix((np.ones(slip.size), (pos[slip], normal)), shape=(r, n))
-    mu = np.zeros(r)
-    mu[pos[slip]] = [m for _, m in row_extra.values()]
+    row_mu = np.zeros(r)
+    row_mu[pos[slip]] = [m for _, m in row_extra.values()]
     T = interface_transform(model, lines)
     if T is not None:
         Q = (T @ Q).tocsr()
         P0 = (P0 @ T.T).tocsr()
         P1 = (P1 @ T.T).tocsr()
     J = np.flatnonzero(comp[retained])
-    return ReducedSystem(Q, P0, P1, mu, retained, J, [pair_of[d] for d in retained[J]], tuple(grazing_case))
+    return ReducedSystem(Q, P0, P1, row_mu[J], retained, J, [pair_of[d] for d in retained[J]], tuple(grazing_case))
 
 
 def interface_transform(model, lines: list[ContactLine]) -> sp.csr_matrix | None:

@@ -55,7 +55,8 @@ class LatticeMatrices:
     ``LatticeMatrices(model, comm)``: SciPy CSR when ``comm`` is serial (None or one rank),
     PETSc AIJ on ``comm``'s row bands otherwise (:func:`assemble`; collective).  Every step of
     the analysis reads these (the static equilibrium, each contact state's pencil, the
-    condensation, the friction range, flutter), so the lattice is assembled once per run.
+    condensation, the friction range, flutter), so the lattice is assembled once per run (and,
+    distributed, once more serially on every rank only where a consumer reads it whole).
     :meth:`whole` gives SciPy K, M on every rank to the consumers that need them whole;
     :meth:`destroy` (or leaving a ``with`` block) frees the PETSc matrices, collectively."""
 
@@ -77,13 +78,14 @@ class LatticeMatrices:
         return self.comm is not None
 
     def whole(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        """``(K, M)`` as SciPy CSR on every rank: the matrices themselves when serial; when
-        distributed, each rank's rows gathered (collective) — the same arrays the serial
-        assembly gives, without assembling again.  Not kept: the caller drops them when done
-        (they are the whole lattice's on every rank: docs/benchmarks-notes-data.md)."""
+        """``(K, M)`` as SciPy CSR on every rank, for the consumers that read the lattice whole
+        (the static equilibrium, the condensation): the matrices themselves when serial; when
+        distributed, the serial assembly on every rank, as those consumers always had (cheaper
+        in time and memory than gathering the PETSc rows: docs/benchmarks-notes-data.md).  Not
+        kept: the caller drops them when done."""
         if not self.distributed:
             return self.K, self.M
-        return gathered_rows(self.K), gathered_rows(self.M)
+        return assemble_scipy(self.model)
 
     def destroy(self) -> None:
         """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
@@ -98,27 +100,6 @@ class LatticeMatrices:
 
     def __exit__(self, *exc) -> None:
         self.destroy()
-
-
-def gathered_rows(A) -> sp.csr_matrix:
-    """A PETSc AIJ matrix distributed by contiguous rows as SciPy CSR on every rank, its rows
-    stacked in order (collective): CSR arrays straight from each rank's own, no re-sorting."""
-    indptr, indices, data = A.getValuesCSR()
-    comm = mpi_comm(A.getComm())
-    counts = np.array(comm.allgather(int(indices.size)), dtype=np.int64)
-    rows = np.array(comm.allgather(int(indptr.size - 1)), dtype=np.int64)
-    n_rows, n_cols = A.getSize()
-    all_indices = np.empty(int(counts.sum()), dtype=indices.dtype)
-    all_data = np.empty(int(counts.sum()), dtype=data.dtype)
-    comm.Allgatherv(indices, [all_indices, counts])
-    comm.Allgatherv(data, [all_data, counts])
-    lengths = np.empty(n_rows, dtype=indptr.dtype)
-    comm.Allgatherv(np.diff(indptr), [lengths, rows])
-    all_indptr = np.zeros(n_rows + 1, dtype=indptr.dtype)
-    np.cumsum(lengths, out=all_indptr[1:])
-    out = sp.csr_matrix((all_data, all_indices, all_indptr), shape=(n_rows, n_cols), copy=False)
-    out.has_sorted_indices = True
-    return out
 
 
 def row_band(model: LatticeModel, comm) -> tuple[int, int]:
