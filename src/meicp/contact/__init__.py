@@ -5,7 +5,8 @@ Modules, from the bottom up: ``lines`` (the contact lines: node pairs, μ, state
 ``maps`` (states → Q̃, P̃₀, P̃₁, μ), ``static`` (the static equilibrium, a package),
 ``problem`` (a scene → its pencil A = −P̃KQ̃, B = P̃MQ̃: :func:`pencil`), ``instability``
 (``analyze``: the divergence verdict), ``critical_friction`` (a package; the function is
-:func:`meicp.critical_friction`), ``result``.  They take a :class:`~meicp.scene.Scene`; :mod:`meicp` also reads scene files.
+:func:`meicp.critical_friction`), ``result``.  They take a :class:`~meicp.scene.Scene`;
+:mod:`meicp` also reads scene files.
 """
 
 from .instability import analyze

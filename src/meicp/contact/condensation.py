@@ -1,7 +1,8 @@
 """The MEiCP of a contact state condensed exactly onto its complementarity DOFs J.
 
 For every assignment of states ``P̃ = Q̃ᵀ + P̃_μ`` (:mod:`.maps`: a slip row is
-``s·e_tᵀ + μ·e_nᵀ``, so ``P̃_μ = diag(μ)·P̃₁`` has one ``μ·e_nᵀ`` row per slip DOF, all in J), hence
+``s·e_tᵀ + μ·e_nᵀ``, so ``P̃_μ = diag(μ)·P̃₁`` has one ``μ·e_nᵀ`` row per slip DOF, all in
+J), hence
 
     H(σ) = σB − A = σ(M̃ + N_M) + K̃ + N,
     K̃ = Q̃ᵀKQ̃ (symmetric),  M̃ = Q̃ᵀMQ̃ (SPD),  N = P̃_μKQ̃,  N_M = P̃_μMQ̃  (rows in J only).
@@ -220,7 +221,8 @@ def from_bordered_schur(pieces: PencilPieces, sigma: float, X: np.ndarray, relat
     S = 0.5 * (X[:nJ, :nJ] + X[:nJ, :nJ].T)
     R = np.array(X[nJ:, :nJ])
     Z = -0.5 * (X[nJ:, nJ:] + X[nJ:, nJ:].T)
-    # only the J × J blocks, rows J first: the whole σM̃ + K̃ per σ costs (docs/benchmarks-notes-data.md)
+    # only the J × J blocks, rows J first: σM̃ + K̃ over every row is not free at every σ
+    # (docs/benchmarks-notes-data.md)
     Hs_JJ = (sigma * pieces.Mt[J] + pieces.Kt[J]).tocsc()[:, J]
     P_JJ = (sigma * pieces.NM[J] + pieces.N[J]).tocsc()[:, J]
     KK = Hs_JJ.toarray() - S

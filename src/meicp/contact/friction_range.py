@@ -3,8 +3,9 @@
 
 Scale every contact line's μ by t ∈ [0, 1] with the contact states held: the pencil is
 affine in t, ``A(t) = −(P̃₀ + t·P̃_μ) K Q̃`` and ``B(t) = (P̃₀ + t·P̃_μ) M Q̃``
-(``P̃_μ = diag(μ)·P̃₁``: :meth:`~meicp.contact.maps.ReducedSystem.friction_rows`).  The Rayleigh bound of
-:func:`meicp.petsc.inertia.rayleigh_bound` — ``sym A(t) ≺ 0`` and ``sym B(t) ≻ 0``, so every
+(``P̃_μ = diag(μ)·P̃₁``: :meth:`~meicp.contact.maps.ReducedSystem.friction_rows`; K and M the
+pencil's own, assembled once).  The Rayleigh bound of
+:func:`meicp.contact.rayleigh.rayleigh_bound` — ``sym A(t) ≺ 0`` and ``sym B(t) ≻ 0``, so every
 MEiCP solution has ``σ = xᵀsym(A)x / xᵀsym(B)x < 0`` — holds on a convex set of t: proved at
 t = 0 (frictionless, held lattice) and at ``t_R`` it holds on all of ``[0, t_R]``.  ``t_R`` is
 found by halving from the scene's μ (where the caller's verdict already failed) and then
