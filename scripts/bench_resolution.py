@@ -22,8 +22,7 @@ holding 90 % of it; a dense SciPy eigen-solve of the same reduced pencil as an i
 check up to 600 reduced DOFs); μ_c by ``meicp.critical_friction`` (it condenses the EiCP in
 μ onto the |J| = n + 1 contact DOFs and enumerates all 2^|J| supports: a proof of the
 smallest μ, up to its limit of 20 pairs, n ≤ 18), timed without its bisection check, and at
-n ≤ 8 also with the check (its default there) and by its former uncondensed path
-(``condense=False``) side by side; and at n = 4, 8, …, 256 (beyond the limit from n = 32) by
+n ≤ 8 also with the check (its default there); and at n = 4, 8, …, 256 (beyond the limit from n = 32) by
 the smallest μ with a certified full-support solution of the same condensed EiCP
 (``meicp.contact.critical_friction.friction_pencils``; the support at which every enumerated level
 attains μ_c; not a proof of minimality).  Richardson
@@ -228,21 +227,19 @@ def mu_c_full_support(Ac, Bc):
 CF_VARIANTS = {
     "critical_friction": ({"bisection": False}, "condensed enumeration, bisection=False"),
     "critical_friction+check": ({}, "condensed enumeration + bisection check (the default at this size)"),
-    "critical_friction-uncondensed": ({"condense": False, "bisection": False},
-                                      "former path: whole reduced lattice per support, bisection=False"),
 }
 
 
 def mu_c_rows(cf_levels, enum_levels, full_levels):
     """μ_c per level: critical_friction (condensed, no check) at enum_levels; with its check
-    and by its former uncondensed path at cf_levels; the full-support value at full_levels."""
+    at cf_levels; the full-support value at full_levels."""
     rows = []
     base = {"part": "convergence", "problem": "two-layer 4x4, slip+ base, mu=3", "quantity": "mu_c", "ranks": 1,
             "repeat": 0}
     for n in sorted(set(cf_levels) | set(enum_levels) | set(full_levels)):
         scene, geo = make_scene(n), geometry(n)
         variants = (["critical_friction"] if n in enum_levels else []) + \
-            (["critical_friction+check", "critical_friction-uncondensed"] if n in cf_levels else [])
+            (["critical_friction+check"] if n in cf_levels else [])
         for m in variants:
             kw, text = CF_VARIANTS[m]
             t0 = time.perf_counter()
@@ -329,7 +326,6 @@ FEATURES = {
     "static-states": "base states from the static frictional LCP (states='solve', top pushed (0.06,-0.1))",
     "critical-friction": "meicp.critical_friction of the base scene (condensed enumeration + bisection check)",
     "critical-friction-nocheck": "meicp.critical_friction(bisection=False): the condensed enumeration alone",
-    "critical-friction-uncondensed": "critical_friction(condense=False, bisection=False): the former path",
 }
 
 
@@ -358,9 +354,7 @@ def run_feature(name, n):
     with Stage() as st:
         if name.startswith("critical-friction"):
             v = meicp.critical_friction(scene, **{"critical-friction": {},
-                                                  "critical-friction-nocheck": {"bisection": False},
-                                                  "critical-friction-uncondensed": {"condense": False,
-                                                                                    "bisection": False}}[name])
+                                                  "critical-friction-nocheck": {"bisection": False}}[name])
         else:
             kw = {"target": SHIFT[n], "nev": 8} if method == "active-set" and SHIFT.get(n) else {}
             r = meicp.analyze(scene, method=method, **kw)

@@ -91,13 +91,14 @@ import meicp
 from bench_common import (MUMPS_ORDER_NAME, Stage, csv_path, lattice_shape, release_memory, rss_bytes,
                           slepc_eigensolve, write_rows)
 from meicp.contact import pencil
-from meicp.contact.maps import contact_sets
+from meicp.contact.lines import contact_lines, with_states
 from meicp.contact.problem import pencil_of
 from meicp.contact.static import static_equilibrium
 from meicp.examples import two_layer_scene
 from meicp.lattice.model import LatticeModel
 from meicp.lcp.siconos import siconos_solve
 from meicp.petsc import import_slepc
+from meicp.petsc.assembly import LatticeMatrices
 from meicp.petsc.mat import destroying, mat_from_scipy
 
 FIELDS = ["problem", "stage", "method", "settings", "ranks", "dofs", "nx", "ny", "J", "n", "repeats",
@@ -121,8 +122,10 @@ def make_scene(nx: int, ny: int, *, states="slip+", load=None):
 
 
 def build_pencil(model, scene, K, M):
-    """The pencil as analyze builds it from K, M (SciPy on 1 rank, PETSc products on several)."""
-    return pencil_of(K, M, model, contact_sets(scene, model))
+    """The pencil as analyze builds it from K, M (SciPy on 1 rank, PETSc products on several);
+    the caller keeps K, M and destroys them."""
+    comm = K.getComm() if hasattr(K, "getComm") else None
+    return pencil_of(LatticeMatrices.wrapping(model, K, M, comm), with_states(contact_lines(scene, model), None))
 
 
 def main_pencil(dofs: int, comm):
@@ -130,6 +133,7 @@ def main_pencil(dofs: int, comm):
     nx, ny = lattice_shape(dofs)
     pen = pencil(make_scene(nx, ny), comm=comm)
     A, B = pen.A, pen.B
+    pen.lattice.destroy()  # K, M: only the pencil is measured
     if not pen.distributed:
         A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
     return nx, ny, A, B

@@ -8,9 +8,10 @@ from hypothesis.extra.numpy import arrays
 from scipy.linalg import eigh
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
-from meicp.contact.condenser import held_factor, refined_solve
+from meicp.contact.condenser_certificates import held_factor, refined_solve
 from meicp.contact.divergence.condensed import prove_no_divergence
-from meicp.contact.maps import contact_sets, reduced_system
+from meicp.contact.lines import contact_lines
+from meicp.contact.maps import reduced_system
 from meicp.contact.problem import pencil
 from meicp.eicp.solve import solve_eicp
 from meicp.lattice.assembly import assemble_scipy
@@ -27,7 +28,7 @@ def split(nx=9, mu=1.3, states="slip-", shear=0.5, rows=(2, 2), **kw):
     scene = two_layer_scene(nx, rows, mu=mu, states=states, shear=shear, **kw)
     model = LatticeModel(scene)
     K, M = assemble_scipy(model)
-    red = reduced_system(model, contact_sets(scene, model), ())
+    red = reduced_system(model, contact_lines(scene, model), ())
     return pieces_of(K, M, red), scene
 
 
@@ -63,7 +64,7 @@ def test_scene_friction_and_unit_friction_pieces_agree():
     scene = two_layer_scene(9, (2, 2), mu=1.3, states="slip-", shear=0.5)
     model = LatticeModel(scene)
     K, M = assemble_scipy(model)
-    red = reduced_system(model, contact_sets(scene, model), ())
+    red = reduced_system(model, contact_lines(scene, model), ())
     u = pieces_of(K, M, red, friction="unit")
     assert abs(u.N * 1.3 - p.N).max() < 1e-12
     with pytest.raises(ValueError, match="friction"):
@@ -210,7 +211,8 @@ def _condenser(scene):
     from meicp.contact.condenser import Condenser
 
     model = LatticeModel(scene)
-    return Condenser(None, model, reduced_system(model, contact_sets(scene, model), ()), method="schur")
+    return Condenser(None, reduced_system(model, contact_lines(scene, model), ()), *assemble_scipy(model),
+                     method="schur")
 
 
 def test_the_schur_condenser_certifies_a_sharp_tau_on_its_own_series():

@@ -6,7 +6,8 @@ from mpi4py import MPI
 
 from meicp.contact.condensation import condense, from_bordered_schur, pieces_of
 from meicp.contact.divergence.condensed import prove_no_divergence
-from meicp.contact.maps import contact_sets, reduced_system
+from meicp.contact.lines import contact_lines
+from meicp.contact.maps import reduced_system
 from meicp.contact.problem import pencil
 from meicp.lattice.assembly import assemble_scipy
 from meicp.lattice.model import LatticeModel
@@ -22,7 +23,7 @@ def test_schur_and_solves_match_dense_on_two_ranks():
     scene = two_layer_scene(9, (2, 2), mu=1.3, states="slip-", shear=0.5)
     model = LatticeModel(scene)
     K, M = assemble_scipy(model)
-    p = pieces_of(K, M, reduced_system(model, contact_sets(scene, model), ()))
+    p = pieces_of(K, M, reduced_system(model, contact_lines(scene, model), ()))
     H = p.H(0.4).toarray()
     J, F = p.J, p.F
     G = H[np.ix_(J, J)] - H[np.ix_(J, F)] @ np.linalg.solve(H[np.ix_(F, F)], H[np.ix_(F, J)])
@@ -90,11 +91,13 @@ def test_a_lattice_not_held_is_refused_on_both_ranks_and_they_stay_in_step(need_
     comm = MPI.COMM_WORLD
     scene = two_layer_scene(6, (2, 2), mu=1.0, states=["slip+"] + ["separated"] * 5, top="free")
     model = LatticeModel(scene)
-    with Condenser(comm, model, reduced_system(model, contact_sets(scene, model), ()), method="schur") as cond:
+    with Condenser(comm, reduced_system(model, contact_lines(scene, model), ()), *assemble_scipy(model),
+                   method="schur") as cond:
         assert not cond.prepare(need_tau=need_tau) and "not held" in cond.why
     assert comm.allreduce(1) == comm.Get_size()
     held = two_layer_scene(20, (2, 2), mu=1.0, states="slip+", shear=0.5)
     model = LatticeModel(held)
-    with Condenser(comm, model, reduced_system(model, contact_sets(held, model), ()), method="schur") as cond:
+    with Condenser(comm, reduced_system(model, contact_lines(held, model), ()), *assemble_scipy(model),
+                   method="schur") as cond:
         assert cond.prepare(need_tau=need_tau) and cond.tau > 0
         assert comm.allreduce(cond.tau, op=MPI.MAX) == comm.allreduce(cond.tau, op=MPI.MIN)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import meicp.contact.critical_friction as cf
+import meicp.contact.critical_friction.solve as cf
 from meicp.contact.critical_friction import CriticalFriction, critical_friction
 
 from meicp.examples import two_layer_scene
@@ -75,14 +75,15 @@ def test_the_lower_end_is_at_least_the_uncondensed_bound():
     import scipy.linalg as sl
 
     from meicp.contact.condensation import pieces_of
-    from meicp.contact.maps import contact_sets, reduced_system
+    from meicp.contact.lines import contact_lines
+    from meicp.contact.maps import reduced_system
     from meicp.lattice.assembly import assemble_scipy
     from meicp.lattice.model import LatticeModel
 
     scene = two_layer_scene(24, (2, 2), mu=1.0, states="slip-", shear=0.5)
     model = LatticeModel(scene)
     K, M = assemble_scipy(model)
-    p = pieces_of(K, M, reduced_system(model, contact_sets(scene, model), ()), friction="unit")
+    p = pieces_of(K, M, reduced_system(model, contact_lines(scene, model), ()), friction="unit")
     N = p.N.toarray()
     top = sl.eigh(-0.5 * (N + N.T), p.Kt.toarray(), eigvals_only=True)[-1]
     mu = critical_friction(scene)

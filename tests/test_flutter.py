@@ -180,7 +180,7 @@ def test_grazing_branches_bracket_the_contact():
     states[3] = "grazing"
     scene = lattice(8, (2, 2), 1.0, states=states)
     with pencil(scene, grazing_case=((0, 3, "slip+"),)) as pen:
-        branches = fl.grazing_branches(pen.sets)
+        branches = fl.grazing_branches(pen.lines)
     assert [label for label, _ in branches] == ["separated", "sliding base:slip+"]
     assert branches[0][1][0].states[3] == "separated" and branches[1][1][0].states[3] == "slip+"
     assert fl.combine_branches([True, None]) is None and fl.combine_branches([False, False]) is False

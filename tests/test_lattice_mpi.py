@@ -53,6 +53,20 @@ def test_distributed_assembly_equals_serial(comm, name):
         M.destroy()
 
 
+@pytest.mark.parametrize("name", [n for n, _ in scenes()])
+def test_the_whole_matrices_gathered_on_every_rank_are_the_serial_assembly(comm, name):
+    """What ``LatticeMatrices.whole`` hands the condenser and the static equilibrium on several
+    ranks: the serial assembly's CSR arrays exactly, the same on every rank."""
+    from meicp.petsc.assembly import LatticeMatrices
+
+    scene = dict(scenes())[name]
+    Ks, Ms = assemble(scene)
+    with LatticeMatrices(LatticeModel(scene), comm) as lattice:
+        for got, ref in zip(lattice.whole(), (Ks, Ms)):
+            assert np.array_equal(got.indptr, ref.indptr) and np.array_equal(got.indices, ref.indices)
+            assert np.array_equal(got.data, ref.data) and got.indices.dtype == ref.indices.dtype
+
+
 def test_row_bands_cover_the_lattice_once(comm):
     model = LatticeModel(free_scene())
     bands = comm.allgather(model.row_band(comm.rank, comm.size))

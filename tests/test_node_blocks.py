@@ -5,7 +5,8 @@ import pytest
 import scipy.sparse as sp
 
 from meicp.contact.condensation import pieces_of
-from meicp.contact.maps import contact_sets, reduced_system
+from meicp.contact.lines import contact_lines
+from meicp.contact.maps import reduced_system
 from meicp.lattice.assembly import assemble_scipy
 from meicp.lattice.model import LatticeModel
 from meicp.lattice.node_blocks import NodeBlocks, node_of
@@ -17,7 +18,7 @@ def _two_layer_FF(nx=8, ny=3):
     scene = two_layer_scene(nx, (ny, ny), mu=1.0, states="slip+", shear=0.5)
     model = LatticeModel(scene)
     K, M = assemble_scipy(model)
-    maps = reduced_system(model, contact_sets(scene, model), ())
+    maps = reduced_system(model, contact_lines(scene, model), ())
     pieces = pieces_of(K, M, maps)
     F = pieces.F
     return pieces.Kt[F][:, F].tocsr(), node_of(maps.retained[F])
@@ -85,8 +86,8 @@ def test_the_condensers_bordered_matrix_is_the_pieces_one_padded(states):
 
     scene = two_layer_scene(8, (3, 3), mu=1.3, states=states, shear=0.5)
     model = LatticeModel(scene)
-    maps = reduced_system(model, contact_sets(scene, model), ())
-    cond = Condenser(None, model, maps)
+    maps = reduced_system(model, contact_lines(scene, model), ())
+    cond = Condenser(None, maps, *assemble_scipy(model))
     P0, P1, rows = cond.padded_parts
     assert np.array_equal(P0.indptr, P1.indptr) and np.array_equal(P0.indices, P1.indices)
     for sigma in (0.0, 0.37, 12.5):
@@ -103,8 +104,8 @@ def test_a_mass_part_outside_the_stiffness_pattern_pads_the_union():
 
     scene = two_layer_scene(8, (3, 3), mu=1.3, states="slip+", shear=0.5)
     model = LatticeModel(scene)
-    maps = reduced_system(model, contact_sets(scene, model), ())
-    cond = Condenser(None, model, maps)
+    maps = reduced_system(model, contact_lines(scene, model), ())
+    cond = Condenser(None, maps, *assemble_scipy(model))
     H0, H1, rows = cond.pieces.bordered_parts()
     n = H0.shape[0]
     far = sp.csr_matrix(([0.25, 0.25], ([0, n - 1], [n - 1, 0])), shape=(n, n))  # nodes far apart

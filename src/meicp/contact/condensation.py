@@ -1,7 +1,8 @@
 """The MEiCP of a contact state condensed exactly onto its complementarity DOFs J.
 
 For every assignment of states ``P̃ = Q̃ᵀ + P̃_μ`` (:mod:`.maps`: a slip row is
-``s·e_tᵀ + μ·e_nᵀ``, so ``P̃_μ`` has one ``μ·e_nᵀ`` row per slip DOF, all in J), hence
+``s·e_tᵀ + μ·e_nᵀ``, so ``P̃_μ = diag(μ)·P̃₁`` has one ``μ·e_nᵀ`` row per slip DOF, all in
+J), hence
 
     H(σ) = σB − A = σ(M̃ + N_M) + K̃ + N,
     K̃ = Q̃ᵀKQ̃ (symmetric),  M̃ = Q̃ᵀMQ̃ (SPD),  N = P̃_μKQ̃,  N_M = P̃_μMQ̃  (rows in J only).
@@ -92,11 +93,12 @@ class PencilPieces:
 
 def pieces_of(K, M, maps, *, friction: str = "scene") -> PencilPieces:
     """Split the pencil of :func:`~meicp.contact.maps.reduced_system`'s maps (K, M SciPy).
-    ``friction="scene"``: N with each contact's own μ; ``"unit"``: μ = 1 (``maps.P_friction``)."""
-    Q = maps.Q
-    Pmu = (maps.P - Q.T) if friction == "scene" else maps.P_friction
+    ``friction="scene"``: N with each contact's own μ (``diag(μ)·P̃₁``); ``"unit"``: μ = 1
+    (``P̃₁``)."""
     if friction not in ("scene", "unit"):
         raise ValueError(f"friction must be 'scene' or 'unit', got {friction!r}")
+    Q = maps.Q
+    Pmu = maps.friction_rows() if friction == "scene" else maps.P1
     KQ, MQ = (K @ Q).tocsr(), (M @ Q).tocsr()
     out = [(Q.T @ KQ).tocsr(), (Q.T @ MQ).tocsr(), (Pmu @ KQ).tocsr(), (Pmu @ MQ).tocsr()]
     for X in out:
@@ -219,7 +221,8 @@ def from_bordered_schur(pieces: PencilPieces, sigma: float, X: np.ndarray, relat
     S = 0.5 * (X[:nJ, :nJ] + X[:nJ, :nJ].T)
     R = np.array(X[nJ:, :nJ])
     Z = -0.5 * (X[nJ:, nJ:] + X[nJ:, nJ:].T)
-    # only the J × J blocks: rows J first (σM̃ + K̃ over every row cost 0.1 s per σ at 10⁶ DOFs)
+    # only the J × J blocks, rows J first: σM̃ + K̃ over every row is not free at every σ
+    # (docs/benchmarks-notes-data.md)
     Hs_JJ = (sigma * pieces.Mt[J] + pieces.Kt[J]).tocsc()[:, J]
     P_JJ = (sigma * pieces.NM[J] + pieces.N[J]).tocsc()[:, J]
     KK = Hs_JJ.toarray() - S

@@ -1,7 +1,7 @@
 """The condensation of one contact state's pencil onto its complementarity DOFs, on MUMPS and
 certified: the pieces of :mod:`.condensation` from a lattice and its maps, a proof that the
 lattice is held once the contact DOFs are (K̃_FF ≻ 0), and the condensed G(σ) with an error
-bound, for :mod:`.divergence_proof` and :mod:`.critical_friction`.
+bound, for :mod:`.divergence.condensed` and :mod:`.critical_friction`.
 
 Two ways (``method``):
 
@@ -19,11 +19,15 @@ Two ways (``method``):
   shifted by −t·M̃_FF − 2ηD proves by its inertia that the lattice is held and certifies the
   τ the σ-windows need (there were three factorisations with three analyses: K̃_FF, its
   inertia, τM̃_FF − K̃_FF).  Where no DMUMPS library of a known version loads
-  (:func:`meicp.petsc.mumps_c.load`), PETSc's factors do it (:func:`held_factor`,
-  :func:`estimate_lambda_min`, :meth:`Condenser.sharper_tau`: only this fallback uses them).
+  (:func:`meicp.petsc.mumps_c.load`), PETSc's factors do it
+  (:func:`~.condenser_certificates.held_factor`,
+  :func:`~.condenser_certificates.estimate_lambda_min`, :meth:`Condenser.sharper_tau`: only
+  this fallback uses them).
 
 ``"auto"``: solves while |F|·|J| ≤ ``SOLVES_LIMIT`` and the mass is diagonal, else Schur.
-Collective on ``comm`` (every rank holds the SciPy pieces; MUMPS factors them distributed).
+Collective on ``comm`` (every rank holds the SciPy pieces, built from the whole SciPy K and M
+of the analysis' one assembly, :meth:`Condenser.of`; MUMPS factors them distributed).  The
+certificates themselves are in :mod:`.condenser_certificates`.
 """
 from __future__ import annotations
 
@@ -35,48 +39,35 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from ..core.threads import dense_phase
-from ..lattice.assembly import assemble_scipy
 from ..lattice.node_blocks import NodeBlocks, node_of
 from ..petsc.comm import to_petsc_comm
-from ..petsc.eigen import inverse_estimate, solve_ghep
-from ..petsc.inertia import INERTIA_OPTIONS, diagonal_scale, rounding_margin
-from ..petsc.mat import destroying, mat_from_scipy
+from ..petsc.eigen import inverse_estimate
+from ..petsc.inertia import diagonal_scale, rounding_margin
 from ..petsc.mumps_c import MumpsError
 from ..petsc.options import SCHUR
 from ..petsc.schur import MumpsFactor, mumps_factor, schur_series
 from .condensation import Condensed, PencilPieces, condense, from_bordered_schur, pieces_of
-from .rayleigh import pencil_is_negative
+from .condenser_certificates import (TAU_EPS, certified_tau, estimate_lambda_min, held_factor, refined_solve,
+                                     schur_error, tau_inertia)
 
 log = logging.getLogger("meicp")
 
 #: ``method="auto"`` condenses by solves (rigorous error bound) while |F|·|J| stays below this
 SOLVES_LIMIT = 2e7
-#: the Schur complement's measured relative error is charged this many times over
-PROBE_SAFETY = 100.0
-#: floor of the charged relative error of a Schur complement (MUMPS' backward error level)
-SCHUR_ERROR_FLOOR = 1e-13
-#: SLEPc options of the estimate of λ_min(K̃_FF, M̃_FF) (half of it is certified): two digits
-#: are plenty (10⁶ DOFs: 1e-2 took 6 solves, 1e-3 took 9, for the same τ to four digits)
-TAU_EPS = {"eps_tol": 1e-2, "eps_ncv": 6, "eps_purify": False}
 #: MUMPS' INFOG(1) for a numerically singular matrix
 SINGULAR = -10
-#: iterative refinement steps of a solve with K̃_FF on a nearby factor (:func:`refined_solve`)
-REFINE_STEPS = 4
 
 
 class Condenser:
-    """``Condenser(comm, model, maps, friction=...)`` (K, M: the lattice's SciPy matrices if
-    already assembled): the split pencil (``pieces``) and
+    """``Condenser(comm, maps, K, M, friction=...)`` (K, M: the lattice's SciPy matrices, whole
+    on every rank; :meth:`of` takes them from a pencil): the split pencil (``pieces``) and
     :meth:`at` (σ) → :class:`~.condensation.Condensed`.  After :meth:`prepare`, ``ready`` says
     whether the condensation is certified usable and ``why`` says why not; ``tau`` is the
     certified λ_min bound (None for the Schur method without windows).  Collective."""
 
-    def __init__(self, comm, model, maps, *, friction: str = "scene", method: str = "auto", K=None, M=None):
+    def __init__(self, comm, maps, K, M, *, friction: str = "scene", method: str = "auto"):
         if method not in ("auto", "schur", "solves"):
             raise ValueError(f"method must be 'auto', 'schur' or 'solves', got {method!r}")
-        if K is None or M is None:
-            K, M = assemble_scipy(model)
         self.comm = comm
         self.pieces: PencilPieces = pieces_of(K, M, maps, friction=friction)
         F, J = self.pieces.F, self.pieces.J
@@ -101,6 +92,14 @@ class Condenser:
         #: series' instance, where half the estimate is certified, the two are equal)
         self.tau_scale: float | None = None
 
+    @classmethod
+    def of(cls, pencil, comm=None, **options) -> "Condenser":
+        """The condenser of a :class:`~meicp.contact.problem.Pencil`'s maps, from its lattice's
+        K and M (gathered whole on every rank when distributed, and dropped once the pieces are
+        split off them).  ``comm``: the communicator MUMPS factors on (default the pencil's)."""
+        K, M = pencil.lattice.whole()
+        return cls(pencil.comm if comm is None else comm, pencil.maps, K, M, **options)
+
     def __enter__(self) -> "Condenser":
         return self
 
@@ -120,8 +119,8 @@ class Condenser:
 
     @cached_property
     def blocks_FF(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        """``(K̃_FF, M̃_FF)``, sliced once (0.3 s per slice at 10⁶ DOFs; the held proof, the
-        sharper τ and the choice of method all read them)."""
+        """``(K̃_FF, M̃_FF)``, sliced once: the held proof, the sharper τ and the choice of method
+        all read them, and a slice is not free at scale (docs/benchmarks-notes-data.md)."""
         F = self.pieces.F
         return self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr()
 
@@ -185,7 +184,8 @@ class Condenser:
           are kept for :meth:`factor_FF`.
 
         Two factorisations (three where t = ½·estimate is not certified); the PETSc way made
-        three, each with its analysis (held factor, G(0) and the sharper τ: 14.6 s at 10⁶ DOFs).
+        three, each with its analysis (held factor, G(0) and the sharper τ; the cost of each way
+        is in docs/benchmarks-notes-data.md).
         The solves with K̃_FF are always kept (``keep_factor`` costs nothing here): used after
         the series has factored another matrix, they factor 𝓗(0) again first."""
         clock = time.perf_counter()
@@ -240,7 +240,7 @@ class Condenser:
             lap("probe")
             return False
         X = series.schur_complement()
-        interior = _InteriorSolve(self.comm, series, F, 0.0)
+        interior = InteriorSolve(self.comm, series, F, 0.0)
         solve = refined_solve(interior, KFF)
         self.relative_error, _ = schur_error(self.comm, pieces, solve, schur=lambda _sigma: X)
         self._schur0 = from_bordered_schur(pieces, 0.0, X, self.relative_error)
@@ -316,7 +316,7 @@ class Condenser:
         return MumpsFactor(self.comm, self.pad_FF(H_FF), symmetric=True)
 
 
-class _InteriorSolve:
+class InteriorSolve:
     """Solves with H_FF(σ) on the Schur series' instance (its interior block), F the interior
     rows: :meth:`solve` takes and returns whole vectors or blocks on every rank (for
     :func:`refined_solve`), :meth:`on_host` on rank 0 only (for SLEPc's shell operator).  The
@@ -338,137 +338,3 @@ class _InteriorSolve:
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         x = self.on_host(rhs)
         return x if self.comm is None or self.comm.Get_size() == 1 else self.comm.bcast(x, root=0)
-
-
-def held_factor(comm, KFF, MFF, *, pad=None) -> tuple[MumpsFactor | None, float | None, str]:
-    """One MUMPS LDLᵀ of K̃_FF − 2η·D (D = diag|K̃_FF|, η the rounding margin of
-    :func:`~meicp.petsc.inertia.rounding_margin`) and the proof its inertia gives: every pivot
-    positive means K̃_FF − 2ηD ≻ 0 up to the factorisation's rounding (one η), so K̃_FF ≻ ηD ≻ 0
-    — the lattice is held once the contact DOFs are — and, with a diagonal M̃_FF,
-    τ = η·min(D/M̃_FF) ≤ λ_min(K̃_FF, M̃_FF).  Returns ``(factor, τ, "")`` (τ 0 for a
-    non-diagonal mass), or ``(None, None, why)`` when not proved (the factor destroyed).
-    ``pad``: the factored matrix padded to node blocks first (:mod:`meicp.lattice.node_blocks`)."""
-    eta = rounding_margin(KFF.shape[0])
-    d = diagonal_scale(KFF)
-    shifted = (KFF - sp.diags(2 * eta * d)).tocsr()
-    factor = MumpsFactor(comm, shifted if pad is None else pad(shifted), symmetric=True, options=INERTIA_OPTIONS)
-    negative, zero, _ = factor.inertia()
-    if negative or zero:
-        factor.destroy()
-        return None, None, (f"K̃_FF is not proved positive definite ({negative + zero} pivot(s) of K̃_FF − 2η·diag "
-                            f"(η = {eta:.1e}) not positive): the lattice is not held once the contact DOFs are")
-    m = MFF.diagonal()
-    diagonal = (MFF - sp.diags(m)).count_nonzero() == 0 and m.size and m.min() > 0
-    return factor, float(eta * np.min(d / m)) if diagonal else 0.0, ""
-
-
-def estimate_lambda_min(factor: MumpsFactor, MFF) -> float:
-    """SLEPc's estimate of λ_min(K̃_FF, M̃_FF) by shift-and-invert on ``factor`` (of
-    :func:`held_factor`: its 2ηD shift is far below the estimate's tolerance); 0 when SLEPc
-    fails — an estimate places windows, it proves nothing."""
-    with destroying(mat_from_scipy(factor.pcomm, MFF)) as (Mp,):
-        try:
-            pairs = solve_ghep(factor.A, Mp, nev=1, target=0.0, options=TAU_EPS, ksp=factor.ksp)
-        except Exception:  # noqa: BLE001 — no estimate: windows split by the certified τ
-            return 0.0
-        for v in pairs.vectors:
-            v.destroy()
-        return max(float(pairs.values[0]), 0.0)
-
-
-def refined_solve(factor, KFF, steps: int = REFINE_STEPS):
-    """Solves with K̃_FF itself from a nearby factor (``factor.solve``): that of K̃_FF − 2ηD
-    (:func:`held_factor`), each step dividing the error by about λ_min(K̃_FF)/(2η·max D) (≈ 10⁶
-    on the lattices measured), or the Schur series' block-low-rank one of K̃_FF
-    (:class:`_InteriorSolve`); a few steps of iterative refinement reach rounding, and it
-    stops when the residual no longer shrinks."""
-    def solve(rhs: np.ndarray) -> np.ndarray:
-        x = factor.solve(rhs)
-        last = np.inf
-        for _ in range(steps):
-            r = rhs - KFF @ x
-            size = float(np.abs(r).max(initial=0.0))
-            if size == 0.0 or size >= 0.5 * last:
-                break
-            last = size
-            x = x + factor.solve(r)
-        return x
-    return solve
-
-
-def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
-    """A certified lower bound τ > 0 of λ_min(K̃_FF, M̃_FF) that the solves' error bounds can
-    use: half a SLEPc estimate, proved by the inertia of τM̃_FF − K̃_FF
-    (:func:`~meicp.contact.rayleigh.pencil_is_negative`), which also proves K̃_FF ≻ 0.
-    ``(None, why)`` when not certified.  ``pad``: as for :func:`held_factor`."""
-    pad = pad or (lambda H: H)
-    with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
-        try:
-            # half the estimate is certified below: a loose tolerance, a short basis and no
-            # purification of the vector are enough (3·10⁵ DOFs: 0.47 s instead of 1.17 s)
-            pairs = solve_ghep(Kp, Mp, nev=1, target=0.0, options=TAU_EPS)
-            est = float(pairs.values[0])
-            for v in pairs.vectors:
-                v.destroy()
-        except Exception as exc:  # noqa: BLE001 — no estimate means no proof, not an error
-            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]  # not PETSc's whole stack
-            return None, f"λ_min(K̃_FF, M̃_FF) not estimated ({first}): the condensation is not certified"
-        if not est > 0:
-            return None, (f"K̃_FF is not positive definite (λ_min ≈ {est:.2e}): the lattice is not held once the "
-                          "contact DOFs are, the condensation is undefined")
-    tau = 0.5 * est
-    why = tau_inertia(comm, KFF, MFF, tau, pad=pad)
-    return (tau, "") if not why else (None, why)
-
-
-def tau_inertia(comm, KFF, MFF, tau: float, *, pad=None) -> str:
-    """"" when the inertia of τM̃_FF − K̃_FF (:func:`~meicp.contact.rayleigh.pencil_is_negative`)
-    proves τ < λ_min(K̃_FF, M̃_FF) (hence K̃_FF ≻ 0), else why not.  ``pad``: as for
-    :func:`held_factor`.  Collective."""
-    shifted = (tau * MFF - KFF).tocsr()
-    shifted = shifted if pad is None else pad(shifted)
-    with destroying(mat_from_scipy(comm, shifted), mat_from_scipy(comm, MFF)) as (Ap, Mp):
-        sign = pencil_is_negative(Ap, Mp, symmetric=True)  # K̃_FF symmetrised, M̃_FF = Q̃ᵀMQ̃
-    if sign is None or sign.proved is not True:
-        return f"τ = {tau:.3e} ≤ λ_min(K̃_FF, M̃_FF) not certified ({'' if sign is None else sign.reason})"
-    return ""
-
-
-def schur_error(comm, pieces: PencilPieces, solve_KFF, *, schur) -> tuple[float, np.ndarray]:
-    """MUMPS' Schur complement X of the σ = 0 bordered matrix and its relative error, measured
-    along three probes v (ones, two seeded random): ‖(Ĝ − G)v‖ / (‖v‖·max|Ĝ|) with Gv from
-    ``solve_KFF`` (solves with K̃_FF refined against it); charged ×PROBE_SAFETY, at least
-    SCHUR_ERROR_FLOOR.  ``schur``: σ → X, e.g. :meth:`Condenser.schur_at`.  Returns
-    ``(relative error, X)``."""
-    X = schur(0.0)
-    G = from_bordered_schur(pieces, 0.0, X, 0.0).G()
-    J, F = pieces.J, pieces.F
-    rng = np.random.default_rng(14)
-    V = np.column_stack([np.ones(J.size), rng.standard_normal((J.size, 2))])
-    # H(0) = K̃ + N with N in the rows J only: H_FJ = K̃_FJ = K̃_JFᵀ (rows J sliced, not all of H(0))
-    K_J, H_J = pieces.Kt[J].tocsc(), (pieces.Kt[J] + pieces.N[J]).tocsc()
-    XF = solve_KFF(K_J[:, F].T @ V)
-    GV = H_J[:, J] @ V - H_J[:, F] @ XF
-    rel = np.linalg.norm(G @ V - GV, axis=0) / (np.linalg.norm(V, axis=0) * max(np.abs(G).max(), 1e-300))
-    return float(max(PROBE_SAFETY * rel.max(), SCHUR_ERROR_FLOOR)), X
-
-
-def on_root(comm, fn):
-    """``fn()`` run on rank 0 and its result broadcast; an exception raised there is raised on
-    every rank (no rank left waiting).  Serial: just ``fn()``.  ``fn`` is a dense phase: its
-    BLAS threads are bounded (:mod:`meicp.core.threads`).  Collective."""
-    if comm is None or comm.Get_size() == 1:
-        with dense_phase():
-            return fn()
-    outcome = None
-    if comm.Get_rank() == 0:
-        try:
-            with dense_phase():
-                outcome = (True, fn())
-        except Exception as exc:  # noqa: BLE001 — re-raised below, on every rank
-            outcome = (False, exc)
-    ok, value = comm.bcast(outcome, root=0)
-    if not ok:
-        raise value
-    return value
-

@@ -39,13 +39,11 @@ import scipy.sparse as sp
 
 from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
-from ..lattice.assembly import assemble_scipy
-from ..lattice.model import LatticeModel
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
-from .maps import contact_sets, reduced_system
-from .problem import pencil_of
 from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
+from .lines import BASE, ContactState, state_names
+from .problem import pencil, pencil_of
 from .result import FlutterMode, growth_frequency
 
 log = logging.getLogger("meicp")
@@ -64,8 +62,8 @@ SEARCH_TARGETS = 3
 SEARCH_NEV = 4
 SEARCH_NCV = 16
 #: at and above this many retained DOFs one target with nev 2, ncv 12, SLEPc tol 1e-10 and a
-#: block-low-rank factor (LOW_RANK_TOL; the residual gate stays 1e-10): about 3 eigen-solves of
-#: the pencil (docs/benchmarks.md, Flutter)
+#: block-low-rank factor (LOW_RANK_TOL; the residual gate stays 1e-10): the search then costs a
+#: few eigen-solves of the pencil (docs/benchmarks-notes-data.md)
 SEARCH_LARGE = 50_000
 #: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
 #: next to the contact for it to count as contact-localised
@@ -305,27 +303,29 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
 # -- the scene level: branches, proxy, the choice of path -------------------------------------
 
 def _sliding_signs(states) -> list:
-    signs = sorted({s for s in states if s in ("slip+", "slip-")})
-    return signs if len(signs) == 1 else ["slip+", "slip-"]
+    signs = sorted({s for s in states if s.slip_sign}, key=lambda s: -s.slip_sign)
+    return signs if len(signs) == 1 else [ContactState.SLIP_PLUS, ContactState.SLIP_MINUS]
 
 
-def grazing_branches(sets) -> list[tuple[str, list]]:
+def grazing_branches(lines) -> list[tuple[str, list]]:
     """[(label, contact lines with every grazing state replaced)]: one entry labelled ""
     without grazing contacts; else ``separated`` (the open side: free) and ``sliding`` (the
     loaded side: v_n = 0 and the friction row in the sliding direction of that contact line —
     the sign its slipping contacts share, each sign in turn when they disagree or none
     slips)."""
-    if not any("grazing" in cs.states for cs in sets):
-        return [("", list(sets))]
-    branches = [("separated", [dataclasses.replace(cs, states=tuple("separated" if s == "grazing" else s
-                                                                     for s in cs.states)) for cs in sets])]
-    choices = [_sliding_signs(cs.states) if "grazing" in cs.states else [None] for cs in sets]
+    GRAZING = ContactState.GRAZING
+
+    def replaced(line, state):
+        return line.in_states(tuple(state if s is GRAZING else s for s in line.states))
+
+    if not any(GRAZING in line.states for line in lines):
+        return [("", list(lines))]
+    branches = [("separated", [replaced(line, ContactState.SEPARATED) for line in lines])]
+    choices = [_sliding_signs(line.states) if GRAZING in line.states else [None] for line in lines]
     for choice in itertools.product(*choices):
-        lines = [cs if sign is None else dataclasses.replace(cs, states=tuple(sign if s == "grazing" else s
-                                                                               for s in cs.states))
-                 for cs, sign in zip(sets, choice)]
-        label = "sliding " + ",".join(f"{cs.name}:{c}" for cs, c in zip(sets, choice) if c is not None)
-        branches.append((label, lines))
+        branch = [line if sign is None else replaced(line, sign) for line, sign in zip(lines, choice)]
+        label = "sliding " + ",".join(f"{line.name}:{c.value}" for line, c in zip(lines, choice) if c is not None)
+        branches.append((label, branch))
     return branches
 
 
@@ -358,7 +358,7 @@ def strip_proxy(scene, base_states):
         scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=tuple(kept),
         interfaces=tuple(i for i in scene.interfaces if i.index < len(kept) - 1),
         boundary=dataclasses.replace(scene.boundary, top="fixed") if cut else scene.boundary,
-        contact=dataclasses.replace(scene.contact, states=tuple(base_states[start:start + nx])))
+        contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
 
 
 def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[complex]:
@@ -367,10 +367,9 @@ def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[compl
     proxy = strip_proxy(scene, base_states)
     if proxy is None:
         return []
-    model = LatticeModel(proxy)
-    K, M = assemble_scipy(model)
-    red = reduced_system(model, contact_sets(proxy, model), ())
-    found = dense_flutter(-(red.P @ K @ red.Q), red.P @ M @ red.Q)
+    with pencil(proxy) as pen:  # a lattice of its own, PROXY_NX × PROXY_ROWS, serial
+        red = pen.maps
+        found = dense_flutter(pen.A, pen.B) if pen.A is not None else PencilFlutter(False)
 
     def near_contact(x):
         energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))
@@ -409,7 +408,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
             f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"))
     why = ""
     if targets is None:
-        base = next((cs.states for cs in pen.sets if cs.name == "base"), ())
+        base = next((line.states for line in pen.lines if line.name == BASE), ())
         targets = proxy_targets(scene, list(base), 1 if n >= SEARCH_LARGE else SEARCH_TARGETS) if base else []
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
         if targets and n >= OFF_CLUSTER_FROM:
@@ -441,16 +440,18 @@ def _to_mode(candidate: FlutterCandidate, maps, branch: str) -> FlutterMode:
                        {k: np.unique(v) for k, v in interface.items()}, candidate.radius, branch, candidate.found_by)
 
 
-def analyze_flutter(K, M, model, sets, scene, comm=None, *, pencil=None, static=None,
-                    options: dict | None = None, **kwargs) -> FlutterVerdict:
-    """The flutter verdict of a scene's steady sliding: one pencil per grazing branch
-    (``pencil``: the MEiCP's own, reused when no contact grazes), the verdicts combined.
-    Collective on ``comm``."""
+def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options: dict | None = None,
+                    **kwargs) -> FlutterVerdict:
+    """The flutter verdict of a scene's steady sliding: one pencil per grazing branch, reduced
+    from the assembled ``lattice`` (:class:`~meicp.petsc.assembly.LatticeMatrices`;
+    ``pencil``: the MEiCP's own, reused when no contact grazes), the verdicts combined.
+    Collective on the lattice's communicator."""
+    comm = lattice.comm
     t0 = time.perf_counter()
     verdicts, modes, evidences = [], [], []
-    for label, lines in grazing_branches(sets):
+    for label, branch in grazing_branches(lines):
         own = pencil is None or label
-        pen = pencil_of(K, M, model, lines, (), static) if own else pencil
+        pen = pencil_of(lattice, branch, (), static) if own else pencil
         try:
             part = pencil_flutter(pen, scene, comm, options=options, **kwargs)
             modes += [_to_mode(m, pen.maps, label) for m in part.modes]

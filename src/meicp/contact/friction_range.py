@@ -3,13 +3,14 @@
 
 Scale every contact line's μ by t ∈ [0, 1] with the contact states held: the pencil is
 affine in t, ``A(t) = −(P̃₀ + t·P̃_μ) K Q̃`` and ``B(t) = (P̃₀ + t·P̃_μ) M Q̃``
-(:func:`~meicp.contact.maps.friction_part` is ``P̃_μ``).  The Rayleigh bound of
-:func:`meicp.petsc.inertia.rayleigh_bound` — ``sym A(t) ≺ 0`` and ``sym B(t) ≻ 0``, so every
+(``P̃_μ = diag(μ)·P̃₁``: :meth:`~meicp.contact.maps.ReducedSystem.friction_rows`; K and M the
+pencil's own, assembled once).  The Rayleigh bound of
+:func:`meicp.contact.rayleigh.rayleigh_bound` — ``sym A(t) ≺ 0`` and ``sym B(t) ≻ 0``, so every
 MEiCP solution has ``σ = xᵀsym(A)x / xᵀsym(B)x < 0`` — holds on a convex set of t: proved at
 t = 0 (frictionless, held lattice) and at ``t_R`` it holds on all of ``[0, t_R]``.  ``t_R`` is
 found by halving from the scene's μ (where the caller's verdict already failed) and then
 geometric bisection, at most ``FACTORISATIONS`` LDLᵀ inertias.  The bound weakens as the
-lattice grows (the condensed proofs of :mod:`.divergence_proof` are sharper but cost a
+lattice grows (the condensed proofs of :mod:`.divergence.condensed` are sharper but cost a
 condensation per σ-window and per μ); it is a statement of what was proved, no more.
 """
 from __future__ import annotations
@@ -17,10 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..petsc.assembly import assemble
 from ..petsc.mat import combination, destroying
 from ..petsc.pencil import reduced_pencil
-from .maps import friction_part
 from .problem import Pencil
 from .rayleigh import rayleigh_bound
 
@@ -50,12 +49,10 @@ def proved_friction_range(pen: Pencil, *, unproved_at: float = 1.0,
     communicator).  ``unproved_at``: a scale t already known not to be proved (the scene's
     own μ, t = 1, when the caller's Rayleigh bound failed there)."""
     red = pen.maps
-    mus = {cs.name: cs.friction for cs in pen.sets if cs.friction > 0}
+    mus = {line.name: line.friction for line in pen.lines if line.friction > 0}
     if not mus or red.J.size == 0:
         return FrictionRange(0.0, unproved_at, {}, "no friction in the sliding contacts' rows", 0)
-    K, M = assemble(pen.model, pen.A.getComm() if pen.distributed else None)
-    with destroying(K, M):
-        A_mu, B_mu = reduced_pencil(K, M, friction_part(red, pen.sets), red.Q, red.retained)
+    A_mu, B_mu = reduced_pencil(pen.K, pen.M, red.friction_rows(), red.Q, red.retained)
     spent = 0
 
     def proved(t: float) -> bool:

@@ -1,6 +1,7 @@
 """The instability analysis end to end (seed 000 §III, docs/design.md §7–§8): ``meicp.analyze``.
 
-1. Lattice: K and M (distributed when ``comm`` has several ranks).
+1. Lattice: K and M (distributed when ``comm`` has several ranks), assembled once
+   (:class:`~meicp.petsc.assembly.LatticeMatrices`): every later step reads them.
 2. Contact states: prescribed by the scene, or from the static frictional equilibrium
    (:func:`meicp.contact.static.static_equilibrium`) when a contact set says ``"solve"``.
 3. For each assignment of the grazing contacts' tangential cases: the pencil
@@ -39,14 +40,14 @@ from ..core.progress import Progress
 from ..core.validation import as_real, check_tol
 from ..eicp.solve import available_methods
 from ..lattice.model import LatticeModel
-from ..petsc.assembly import assemble
 from ..lattice.size import check_size
+from ..petsc.assembly import LatticeMatrices
 from ..petsc.comm import index_max
-from ..petsc.mat import destroying
 from ..petsc.stages import stage
 from ..scene import Scene
 from .divergence import all_held, divergence_of
 from .flutter import analyze_flutter, not_analysed
+from .lines import BASE, ContactState, state_names
 from .maps import grazing_cases
 from .modal import has_contact, modal_analysis
 from .problem import contact_states, pencil_of
@@ -91,43 +92,43 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
         return modal_analysis(scene, model, comm, nev=solver_options.get("nev"),
                               options=solver_options.get("options"))
     result = InstabilityResult()
-    # -- states ---------------------------------------------------------------------------
-    t0 = time.perf_counter()
-    with stage("static"):
-        sets, static = contact_states(scene, model, comm)
-    if static is not None:
-        timings["static"] = time.perf_counter() - t0
-        result.static = static
-        if sets is None:
-            result.status, result.message = static.status, f"static equilibrium failed: {static.message}"
-            result.timings = timings
-            return result
-    result.states = list(next((cs.states for cs in sets if cs.name == "base"), ()))
-    result.interface_states = {cs.name: list(cs.states) for cs in sets if cs.name != "base"}
-    # -- lattice --------------------------------------------------------------------------
+    # -- lattice: assembled once, read by every step below ----------------------------------
     t0 = time.perf_counter()
     with stage("assemble"):
-        K, M = assemble(model, comm)  # PETSc (row bands) when distributed, else SciPy
+        lattice = LatticeMatrices(model, comm)  # PETSc (row bands) when distributed, else SciPy
     timings["assemble"] = time.perf_counter() - t0
     log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
-    # -- one MEiCP per grazing case -------------------------------------------------------
-    method = method or scene.solver.method
-    verdicts, sliding = [], None
-    n_grazing = sum(s == "grazing" for cs in sets for s in cs.states)
-    progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
-    with destroying(K, M):
-        for k, case in enumerate(grazing_cases(sets)):
+    with lattice:
+        # -- states -----------------------------------------------------------------------
+        t0 = time.perf_counter()
+        with stage("static"):
+            lines, static = contact_states(scene, lattice)
+        if static is not None:
+            timings["static"] = time.perf_counter() - t0
+            result.static = static
+            if lines is None:
+                result.status, result.message = static.status, f"static equilibrium failed: {static.message}"
+                result.timings = timings
+                return result
+        result.states = state_names(next((line.states for line in lines if line.name == BASE), ()))
+        result.interface_states = {line.name: state_names(line.states) for line in lines if line.name != BASE}
+        # -- one MEiCP per grazing case ---------------------------------------------------
+        method = method or scene.solver.method
+        verdicts, sliding = [], None
+        n_grazing = sum(s is ContactState.GRAZING for line in lines for s in line.states)
+        progress = Progress("grazing cases", total=3 ** n_grazing, unit="MEiCPs")
+        for k, case in enumerate(grazing_cases(lines)):
             progress.update(k, detail=f"{sum(len(v.modes) for v in verdicts)} mode(s) so far")
             t0 = time.perf_counter()
             with stage("reduce"):
-                pen = pencil_of(K, M, model, sets, case, static)
+                pen = pencil_of(lattice, lines, case, static)
             with pen:
                 red = pen.maps
                 timings["reduce"] = timings.get("reduce", 0.0) + time.perf_counter() - t0
                 result.sizes = {"dofs": model.n_dofs, "retained": int(red.retained.size),
                                 "complementarity": int(red.J.size)}
                 log.info("MEiCP: %d retained DOFs, %d complementarity pairs%s", red.retained.size, red.J.size,
-                         f", grazing case {case}" if case else "")
+                         f", grazing case {tuple((s, i, c.value) for s, i, c in case)}" if case else "")
                 if red.retained.size == 0:
                     verdicts.append(all_held())
                     continue
@@ -137,12 +138,12 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):
-                        sliding = analyze_flutter(K, M, model, sets, scene, comm, pencil=pen, static=static,
+                        sliding = analyze_flutter(lattice, lines, scene, pencil=pen, static=static,
                                                   options=dict(scene.petsc))
             verdicts.append(verdict)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):
-                sliding = analyze_flutter(K, M, model, sets, scene, comm, static=static, options=dict(scene.petsc))
+                sliding = analyze_flutter(lattice, lines, scene, static=static, options=dict(scene.petsc))
     result.modes = sorted((m for v in verdicts for m in v.modes), key=lambda m: -m.sigma)
     result.eicp = [v.eicp for v in verdicts]
     result.proofs = [v.proof for v in verdicts]

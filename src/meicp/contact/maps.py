@@ -18,12 +18,19 @@ frictional interfaces enter through the change of variables ``u = T u'`` with
 numbering, and the pencil is ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (B is diagonal for a base
 contact with lumped M, and nonsymmetric once an interface couples u_lower and d).
 
+μ stays data: :class:`ReducedSystem` keeps the friction-free rows P̃₀, the unit-friction rows
+P̃₁ (one ``e_nᵀ`` per slip row) and the μ of each complementarity row (the only rows friction
+enters), and forms ``P̃ = P̃₀ + diag(μ)·P̃₁`` in one place (:meth:`ReducedSystem.rows_at`);
+the critical friction (μ as the eigenvalue), the friction range (μ scaled) and the
+condensation's friction part read P̃₀, P̃₁ and μ directly.
+
 Retained DOFs are ordered by their natural DOF number, so a distributed layout that
 follows the lattice's row bands keeps each reduced DOF on the rank of its node.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass, field
 
@@ -31,162 +38,145 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core.errors import ProblemError
-from ..scene import SOLVE, STATES
+from .lines import ContactLine, ContactState
 
 #: how many grazing contacts' tangential cases (3 each) may be enumerated
 MAX_GRAZING = 6
-
-
-@dataclass(frozen=True)
-class ContactSet:
-    """One contact line: the base (``name = "base"``) or a frictional interface (the lower
-    layer's name).  ``lower``: node of the lower side (None for the base); ``upper``: the
-    node that carries the contact DOFs (the base's contact node, or the upper node whose
-    DOFs become the relative displacement d)."""
-
-    name: str
-    upper: np.ndarray
-    lower: np.ndarray | None
-    friction: float
-    states: tuple
+#: the tangential cases of a grazing contact
+TANGENTIAL_CASES = (ContactState.STICK, ContactState.SLIP_PLUS, ContactState.SLIP_MINUS)
 
 
 @dataclass
 class ReducedSystem:
-    """The maps of one assignment of states.  Q (n × r) and P (r × n) in natural numbering,
-    ``retained`` the natural DOF of each reduced DOF (sorted), ``J`` the complementarity
-    positions, ``pair_of`` for each J position: (contact set name, contact index)."""
+    """The maps of one assignment of states, μ kept as data.  Q (n × r) and the rows
+    ``P̃ = P₀ + diag(μ)·P₁`` (r × n) in natural numbering: ``P0`` the friction-free rows (unit
+    rows, ``s·e_tᵀ`` for a slip DOF), ``P1`` the unit-friction rows (``e_nᵀ`` in the row of each
+    slip DOF, zero rows elsewhere), ``mu`` the μ of the row of each J position (its contact
+    line's for a slip row, 0 for a grazing contact's normal row; every other row has none, so
+    the vector over all r rows is only formed when P̃ is).  ``retained`` the natural DOF of each
+    reduced DOF (sorted), ``J`` the complementarity positions, ``pair_of`` for each J position:
+    (contact line name, contact index, ``"t"`` or ``"n"``)."""
 
     Q: sp.csr_matrix
-    P: sp.csr_matrix
-    P_friction: sp.csr_matrix  # the part of P proportional to μ (for μ as the eigenvalue)
+    P0: sp.csr_matrix
+    P1: sp.csr_matrix
+    mu: np.ndarray
     retained: np.ndarray
     J: np.ndarray
     pair_of: list = field(default_factory=list)
     grazing_case: tuple = ()
 
+    @property
+    def P(self) -> sp.csr_matrix:
+        """P̃ with each contact line's own μ (formed when asked: the pencil reads it once)."""
+        return self.rows_at()
 
-def contact_sets(scene, model, states_override: dict | None = None) -> list[ContactSet]:
-    """The scene's contact lines with their states resolved (``states_override``: name →
-    list of states, e.g. from the static equilibrium).  Raises ProblemError for a state list
-    of the wrong length or an unresolved ``"solve"``."""
-    sets = []
-    override = states_override or {}
-    if model.boundary.bottom == "contact":
-        nodes = model.contact_nodes()
-        states = _resolve(override.get("base", scene.contact.states), nodes.size, "contact.states")
-        sets.append(ContactSet("base", nodes, None, float(scene.contact.friction), states))
-    for k, itf in enumerate(scene.interfaces):
-        if itf.kind != "frictional":
-            continue
-        lower, upper = model.interface_node_pairs(itf.index)
-        states = _resolve(override.get(itf.below, itf.states), upper.size, f"interfaces[{k}].states")
-        sets.append(ContactSet(itf.below, upper, lower, float(itf.friction), states))
-    return sets
+    def friction_rows(self, mu=None) -> sp.csr_matrix:
+        """``diag(μ)·P₁``: the part of P̃ proportional to friction (``mu``: None for each line's
+        own μ, a number for every contact at that μ)."""
+        return (sp.diags(self._row_mu(mu)) @ self.P1).tocsr()
 
+    def rows_at(self, mu=None) -> sp.csr_matrix:
+        """``P̃ = P₀ + diag(μ)·P₁``, the one place it is formed (``mu`` as for
+        :meth:`friction_rows`)."""
+        return (self.P0 + self.friction_rows(mu)).tocsr()
 
-def _resolve(states, count: int, key: str) -> tuple:
-    if states == SOLVE or states is None:
-        raise ProblemError(f"{key} = \"solve\" needs the static equilibrium first")
-    if isinstance(states, str):
-        states = (states,) * count
-    states = tuple(states)
-    if len(states) != count:
-        raise ProblemError(f"{key} has {len(states)} states for {count} contact nodes")
-    bad = [s for s in states if s not in STATES]
-    if bad:
-        raise ProblemError(f"{key}: unknown state {bad[0]!r} (expected one of {', '.join(STATES)})")
-    return states
+    def with_friction(self, mu: float) -> "ReducedSystem":
+        """These maps with every contact at friction ``mu`` (the same states and DOFs)."""
+        return dataclasses.replace(self, mu=self._row_mu(mu)[self.J])
+
+    def _row_mu(self, mu) -> np.ndarray:
+        """μ of every row of P̃: each line's own (``mu`` None), or ``mu`` in every slip row."""
+        rows = np.zeros(self.P0.shape[0])
+        if mu is None:
+            rows[self.J] = self.mu
+        else:
+            rows[np.diff(self.P1.indptr) > 0] = float(mu)
+        return rows
 
 
-def grazing_cases(sets: list[ContactSet]):
+def grazing_cases(lines: list[ContactLine]):
     """Every assignment of tangential cases to the grazing contacts: tuples of
-    (set index, contact index, case) with case in stick | slip+ | slip-."""
-    grazing = [(s, i) for s, cs in enumerate(sets) for i, st in enumerate(cs.states) if st == "grazing"]
+    (line index, contact index, case) with case a :data:`TANGENTIAL_CASES` state."""
+    grazing = [(s, i) for s, line in enumerate(lines) for i, st in enumerate(line.states)
+               if st is ContactState.GRAZING]
     if len(grazing) > MAX_GRAZING:
         raise ProblemError(f"{len(grazing)} grazing contacts: their 3^{len(grazing)} tangential cases are "
                            f"too many to enumerate (limit {MAX_GRAZING}); prescribe their states")
-    for cases in itertools.product(("stick", "slip+", "slip-"), repeat=len(grazing)):
+    for cases in itertools.product(TANGENTIAL_CASES, repeat=len(grazing)):
         yield tuple((s, i, c) for (s, i), c in zip(grazing, cases))
 
 
-def reduced_system(model, sets: list[ContactSet], grazing_case: tuple = ()) -> ReducedSystem:
-    """The maps Q̃, P̃ for the states of ``sets`` (grazing contacts resolved by
+def reduced_system(model, lines: list[ContactLine], grazing_case: tuple = ()) -> ReducedSystem:
+    """The maps Q̃, P̃₀, P̃₁ and μ for the states of ``lines`` (grazing contacts resolved by
     ``grazing_case`` from :func:`grazing_cases`)."""
+    STICK, SEPARATED, GRAZING = ContactState.STICK, ContactState.SEPARATED, ContactState.GRAZING
     n = model.n_dofs
     keep = np.ones(n, dtype=bool)
     keep[model.constrained_dofs()] = False
-    # per DOF: column sign (0 removed / ±1), complementarity flag, row: extra μ·e_n entry
+    # per DOF: column sign (0 removed / ±1), complementarity flag, row: the friction entry μ·e_n
     col_sign = keep.astype(np.int8)
     comp = np.zeros(n, dtype=bool)
     row_extra = {}  # t DOF -> (n DOF, μ)
     pair_of = {}
-    case_of = {(s, i): c for s, i, c in grazing_case}
-    for s_idx, cs in enumerate(sets):
-        for i, (node, state) in enumerate(zip(cs.upper, cs.states)):
+    case_of = {(s, i): ContactState(c) for s, i, c in grazing_case}
+    for s_idx, line in enumerate(lines):
+        for i, (node, state) in enumerate(zip(line.upper, line.states)):
             t, nn = 2 * node, 2 * node + 1
-            if not keep[t]:  # x held by a fixed side: it cannot slip
-                state = {"slip+": "stick", "slip-": "stick"}.get(state, state)
+            if not keep[t] and state.slip_sign:  # x held by a fixed side: it cannot slip
+                state = STICK
             if not (keep[t] or keep[nn]):
                 continue  # held in both directions by the boundary
             tangential = state
-            if state == "grazing":
+            if state is GRAZING:
                 tangential = case_of.get((s_idx, i))
                 if tangential is None:
                     raise ProblemError("grazing contacts need a tangential case (use grazing_cases)")
                 comp[nn] = True  # x_n = v_n ≥ 0 ⊥ w_n ≥ 0
-                pair_of[nn] = (cs.name, i, "n")
-            if state == "separated":
+                pair_of[nn] = (line.name, i, "n")
+            if state is SEPARATED:
                 continue
-            if state == "stick" or tangential == "stick":
+            if state is STICK or tangential is STICK:
                 col_sign[t] = 0
-                if state == "stick":
+                if state is STICK:
                     col_sign[nn] = 0
                 continue
             if not keep[nn]:  # y held by the boundary: slip on a held normal is plain free x
                 continue
             # slip in direction s (also the tangential case of a grazing contact)
-            sign = 1 if tangential == "slip+" else -1
-            col_sign[t] = sign
+            col_sign[t] = tangential.slip_sign
             comp[t] = True
-            pair_of[t] = (cs.name, i, "t")
-            row_extra[t] = (nn, cs.friction)
-            if state != "grazing":
+            pair_of[t] = (line.name, i, "t")
+            row_extra[t] = (nn, line.friction)
+            if state is not GRAZING:
                 col_sign[nn] = 0
     retained = np.flatnonzero(col_sign != 0)
     r = retained.size
     pos = np.full(n, -1, dtype=np.int64)
     pos[retained] = np.arange(r)
     Q = sp.csr_matrix((col_sign[retained].astype(float), (retained, np.arange(r))), shape=(n, r))
-    # P: row k = sign·e_dof (+ μ e_n for slip rows); for non-slip DOFs sign = 1
-    P_rows = [np.arange(r)]
-    P_cols = [retained]
-    P_vals = [np.where(comp[retained] & np.isin(retained, list(row_extra)), col_sign[retained], 1.0)]
-    fr_rows, fr_cols, fr_vals = [], [], []
-    for t, (nn, mu) in row_extra.items():
-        fr_rows.append(pos[t])
-        fr_cols.append(nn)
-        fr_vals.append(1.0)
-        P_rows.append(np.array([pos[t]]))
-        P_cols.append(np.array([nn]))
-        P_vals.append(np.array([mu]))
-    P = sp.csr_matrix((np.concatenate(P_vals), (np.concatenate(P_rows), np.concatenate(P_cols))), shape=(r, n))
-    P_friction = sp.csr_matrix((np.array(fr_vals, dtype=float), (np.array(fr_rows, dtype=np.int64),
-                                np.array(fr_cols, dtype=np.int64))), shape=(r, n))
-    T = interface_transform(model, sets)
+    # P₀: row k = sign·e_dof (the slip direction for slip rows, 1 otherwise); P₁: e_n in slip rows
+    P0 = sp.csr_matrix((np.where(comp[retained] & np.isin(retained, list(row_extra)), col_sign[retained], 1.0),
+                        (np.arange(r), retained)), shape=(r, n))
+    slip = np.array(list(row_extra), dtype=np.int64)
+    normal = np.array([nn for nn, _ in row_extra.values()], dtype=np.int64)
+    P1 = sp.csr_matrix((np.ones(slip.size), (pos[slip], normal)), shape=(r, n))
+    row_mu = np.zeros(r)
+    row_mu[pos[slip]] = [m for _, m in row_extra.values()]
+    T = interface_transform(model, lines)
     if T is not None:
         Q = (T @ Q).tocsr()
-        P = (P @ T.T).tocsr()
-        P_friction = (P_friction @ T.T).tocsr()
+        P0 = (P0 @ T.T).tocsr()
+        P1 = (P1 @ T.T).tocsr()
     J = np.flatnonzero(comp[retained])
-    return ReducedSystem(Q, P, P_friction, retained, J, [pair_of[d] for d in retained[J]], tuple(grazing_case))
+    return ReducedSystem(Q, P0, P1, row_mu[J], retained, J, [pair_of[d] for d in retained[J]], tuple(grazing_case))
 
 
-def interface_transform(model, sets: list[ContactSet]) -> sp.csr_matrix | None:
+def interface_transform(model, lines: list[ContactLine]) -> sp.csr_matrix | None:
     """``T`` with ``u = T u'``: the upper node of each frictional pair carries
     ``d = u_upper − u_lower`` in u', so ``u_upper = u'_upper + u'_lower``.  None without
     frictional interfaces."""
-    pairs = [(cs.upper, cs.lower) for cs in sets if cs.lower is not None]
+    pairs = [(line.upper, line.lower) for line in lines if line.lower is not None]
     if not pairs:
         return None
     n = model.n_dofs
@@ -196,13 +186,3 @@ def interface_transform(model, sets: list[ContactSet]) -> sp.csr_matrix | None:
     cols = np.concatenate([2 * lower, 2 * lower + 1])
     E = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
     return (sp.identity(n, format="csr") + E).tocsr()
-
-
-def friction_part(red: ReducedSystem, sets: list[ContactSet]) -> sp.csr_matrix:
-    """μ·P₁: the part of P̃ proportional to friction, with each contact line's own μ
-    (``P̃ − friction_part`` is P̃ at μ = 0)."""
-    mus = np.zeros(red.P.shape[0])
-    for k, (name, _, kind) in enumerate(red.pair_of):
-        if kind == "t":
-            mus[red.J[k]] = next(cs.friction for cs in sets if cs.name == name)
-    return (sp.diags(mus) @ red.P_friction).tocsr()

@@ -30,7 +30,7 @@ from ..core.errors import ConvergenceError
 from ..core.matrix import is_petsc_mat, max_abs_entry
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..lattice.model import LatticeModel
-from ..petsc.assembly import assemble
+from ..petsc.assembly import LatticeMatrices
 from ..petsc.eigen import solve_ghep
 from ..petsc.inertia import nonnegative_count, rounding_margin
 from ..petsc.mat import destroying, mat_from_scipy, vec_to_numpy
@@ -70,12 +70,12 @@ def modal_analysis(scene: Scene, model: LatticeModel, comm=None, *, nev: int | N
     tol = tol or scene.solver.tol or 1e-10
     t0 = time.perf_counter()
     with stage("assemble"):
-        K, M = assemble(model, comm)
+        lattice = LatticeMatrices(model, comm)
     timings["assemble"] = time.perf_counter() - t0
-    with destroying(K, M):
+    with lattice:
         t0 = time.perf_counter()
         with stage("reduce"):
-            pen = pencil_of(K, M, model, [])
+            pen = pencil_of(lattice, [])
         timings["reduce"] = time.perf_counter() - t0
     with pen:
         r = int(pen.maps.retained.size)

@@ -3,7 +3,9 @@
 for the instability analysis, the critical friction, tests and benchmark scripts alike.
 
 States come from the scene (prescribed), from the static frictional equilibrium when a
-contact set says ``"solve"`` (:func:`contact_states`), or from the caller.
+contact line says ``"solve"`` (:func:`contact_states`), or from the caller.  The lattice's K
+and M are assembled once per analysis (:class:`~meicp.petsc.assembly.LatticeMatrices`) and every
+pencil reduced from them keeps them (``Pencil.lattice``), with the communicator.
 """
 
 from __future__ import annotations
@@ -17,11 +19,12 @@ from ..core.comm import mpi_comm
 from ..core.errors import ConvergenceError
 from ..core.matrix import is_petsc_mat
 from ..lattice.model import LatticeModel
-from ..petsc.assembly import assemble
+from ..petsc.assembly import LatticeMatrices
 from ..petsc.mat import destroying
 from ..petsc.pencil import reduced_pencil
 from ..scene import SOLVE, Scene
-from .maps import ContactSet, ReducedSystem, contact_sets, reduced_system
+from .lines import BASE, ContactLine, contact_lines, with_states
+from .maps import ReducedSystem, reduced_system
 from .static import StaticResult, static_equilibrium
 
 log = logging.getLogger("meicp")
@@ -31,21 +34,42 @@ log = logging.getLogger("meicp")
 class Pencil:
     """One MEiCP ``(σB − A)x = w`` of a scene: ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (SciPy CSR, or
     PETSc Mats distributed by the lattice's row bands), ``J`` the complementarity positions,
-    ``maps`` the :class:`~meicp.contact.maps.ReducedSystem` (Q̃, P̃, retained DOFs, which
-    contact each J position belongs to), ``sets`` the contact lines with their states,
-    ``model`` the lattice and ``static`` the static equilibrium the states came from (None
-    when prescribed).  A context manager: PETSc matrices are destroyed on leaving it."""
+    ``maps`` the :class:`~meicp.contact.maps.ReducedSystem` (Q̃, P̃₀, P̃₁, μ, retained DOFs,
+    which contact each J position belongs to), ``lines`` the contact lines with their states,
+    ``lattice`` the :class:`~meicp.petsc.assembly.LatticeMatrices` (K, M, the communicator and
+    the model) the pencil was reduced from, and ``static`` the static equilibrium the states
+    came from (None when prescribed).  A context manager: A and B are destroyed on leaving it,
+    and the lattice's K and M too when the pencil owns them (``owns_lattice``: made by
+    :func:`pencil`; an analysis that reduces several pencils from one lattice destroys it itself)."""
 
     A: object
     B: object
     maps: ReducedSystem
-    sets: list
-    model: LatticeModel
+    lines: tuple
+    lattice: LatticeMatrices
     static: StaticResult | None = None
+    owns_lattice: bool = False
 
     @property
     def J(self) -> np.ndarray:
         return self.maps.J
+
+    @property
+    def K(self):
+        return self.lattice.K
+
+    @property
+    def M(self):
+        return self.lattice.M
+
+    @property
+    def comm(self):
+        """The mpi4py communicator the pencil is distributed over (None: serial)."""
+        return self.lattice.comm
+
+    @property
+    def model(self) -> LatticeModel:
+        return self.lattice.model
 
     @property
     def distributed(self) -> bool:
@@ -58,61 +82,76 @@ class Pencil:
         self.destroy()
 
     def destroy(self) -> None:
-        """Free PETSc matrices (collective); nothing to do for SciPy ones."""
+        """Free PETSc matrices (collective): A and B, and K and M when owned; nothing to do for
+        SciPy ones."""
         with destroying(self.A, self.B):
             self.A = self.B = None
+        if self.owns_lattice:
+            self.lattice.destroy()
 
 
 def needs_static(scene: Scene) -> bool:
-    """Whether some contact set's states come from the static equilibrium."""
+    """Whether some contact line's states come from the static equilibrium."""
     if scene.contact is not None and scene.contact.states == SOLVE:
         return True
     return any(i.kind == "frictional" and i.states in (SOLVE, None) for i in scene.interfaces)
 
 
-def contact_states(scene: Scene, model: LatticeModel, comm=None) -> tuple[list[ContactSet] | None,
-                                                                          StaticResult | None]:
+def contact_states(scene: Scene, lattice: LatticeMatrices) -> tuple[tuple[ContactLine, ...] | None,
+                                                                    StaticResult | None]:
     """The scene's contact lines with their states resolved, and the static equilibrium
     result when it was needed (else None).  When it failed the lines are None: the caller
-    decides whether that is an error.  Collective on ``comm`` (the static equilibrium)."""
+    decides whether that is an error.  The static equilibrium reads the lattice's K (whole, on
+    every rank) and is collective on its communicator."""
+    model = lattice.model
+    lines = contact_lines(scene, model)
     if not needs_static(scene):
-        return contact_sets(scene, model), None
+        return with_states(lines, None), None
     log.info("static equilibrium: frictional contact LCP")
-    static = static_equilibrium(scene, model=model, comm=mpi_comm(comm))
+    K, _ = lattice.whole()
+    static = static_equilibrium(scene, model=model, comm=lattice.comm, lines=lines, K=K)
+    del K
     if not static.success:
         return None, static
-    return contact_sets(scene, model, {"base": static.states, **static.interface_states}), static
+    return with_states(lines, {BASE: static.states, **static.interface_states}), static
 
 
-def pencil_of(K, M, model: LatticeModel, sets: list[ContactSet], grazing_case: tuple = (),
-              static: StaticResult | None = None) -> Pencil:
-    """The pencil of already assembled K, M (SciPy, or PETSc when distributed) for the states
-    of ``sets`` and one grazing case (:func:`~meicp.contact.maps.grazing_cases`)."""
-    maps = reduced_system(model, sets, grazing_case)
+def pencil_of(lattice: LatticeMatrices, lines, grazing_case: tuple = (),
+              static: StaticResult | None = None, *, maps: ReducedSystem | None = None) -> Pencil:
+    """The pencil of the assembled ``lattice`` for the states of ``lines`` and one grazing
+    case (:func:`~meicp.contact.maps.grazing_cases`); ``maps``: the reduced system when the
+    caller has it already (e.g. with another μ: :meth:`ReducedSystem.with_friction`)."""
+    maps = reduced_system(lattice.model, lines, grazing_case) if maps is None else maps
     A = B = None
     if maps.retained.size:
-        A, B = reduced_pencil(K, M, maps.P, maps.Q, maps.retained)
-    return Pencil(A, B, maps, sets, model, static)
+        A, B = reduced_pencil(lattice.K, lattice.M, maps.P, maps.Q, maps.retained)
+    return Pencil(A, B, maps, tuple(lines), lattice, static)
 
 
 def pencil(scene: Scene, states=None, comm=None, *, grazing_case: tuple = ()) -> Pencil:
     """The MEiCP pencil of ``scene``: ``A = −P̃ K Q̃``, ``B = P̃ M Q̃``, J and the maps.
 
-    states: None (the scene's own; the static equilibrium's when a set says ``"solve"``,
+    states: None (the scene's own; the static equilibrium's when a line says ``"solve"``,
     ConvergenceError if it fails), or the states of the base (one state or a list, left to
     right), or a dict naming contact lines (``"base"``, each frictional interface by its
     lower layer) → states.  comm: None or a one-rank communicator for SciPy matrices, several
     ranks for distributed PETSc ones (collective; destroy them with ``Pencil.destroy`` or a
-    ``with`` block).  grazing_case: the tangential case of each grazing contact, one of
-    :func:`~meicp.contact.maps.grazing_cases` (required when a contact is grazing)."""
-    comm = mpi_comm(comm)
-    model = LatticeModel(scene)
-    static = None
-    if states is None:
-        sets, static = contact_states(scene, model, comm)
-        if sets is None:
-            raise ConvergenceError(f"static equilibrium failed: {static.message}", static)
-    else:
-        sets = contact_sets(scene, model, states if isinstance(states, dict) else {"base": states})
-    with destroying(*assemble(model, comm)) as (K, M):
-        return pencil_of(K, M, model, sets, grazing_case, static)
+    ``with`` block: the pencil owns its lattice).  grazing_case: the tangential case of each
+    grazing contact, one of :func:`~meicp.contact.maps.grazing_cases` (required when a contact
+    is grazing)."""
+    lattice = LatticeMatrices(LatticeModel(scene), mpi_comm(comm))
+    try:
+        static = None
+        if states is None:
+            lines, static = contact_states(scene, lattice)
+            if lines is None:
+                raise ConvergenceError(f"static equilibrium failed: {static.message}", static)
+        else:
+            lines = with_states(contact_lines(scene, lattice.model),
+                                states if isinstance(states, dict) else {BASE: states})
+        pen = pencil_of(lattice, lines, grazing_case, static)
+    except BaseException:
+        lattice.destroy()
+        raise
+    pen.owns_lattice = True
+    return pen

@@ -20,7 +20,9 @@ owns every returned PETSc object and destroys it (collectively) when done.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
+from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from ..lattice.assembly import (as_model, assemble_scipy, chunks, index_dtype, mass_diagonal,
                                 neighbour_exists, stiffness_block)
@@ -45,6 +47,59 @@ def assemble(scene, comm=None):
     if comm is None:
         return assemble_scipy(model)
     return assemble_petsc(model, comm)
+
+
+class LatticeMatrices:
+    """K and M of one lattice, assembled once for one analysis and owned by it.
+
+    ``LatticeMatrices(model, comm)``: SciPy CSR when ``comm`` is serial (None or one rank),
+    PETSc AIJ on ``comm``'s row bands otherwise (:func:`assemble`; collective).  Every step of
+    the analysis reads these (the static equilibrium, each contact state's pencil, the
+    condensation, the friction range, flutter), so the lattice is assembled once per run (and,
+    distributed, once more serially on every rank only where a consumer reads it whole).
+    :meth:`whole` gives SciPy K, M on every rank to the consumers that need them whole;
+    :meth:`destroy` (or leaving a ``with`` block) frees the PETSc matrices, collectively."""
+
+    def __init__(self, model: LatticeModel, comm=None):
+        self.model = model
+        self.comm = mpi_comm(comm)
+        self.K, self.M = assemble(model, self.comm)
+
+    @classmethod
+    def wrapping(cls, model: LatticeModel, K, M, comm=None) -> "LatticeMatrices":
+        """K and M the caller assembled already (e.g. a benchmark that times the assembly on
+        its own; SciPy, or PETSc on ``comm``), destroyed by :meth:`destroy` or by the caller."""
+        obj = cls.__new__(cls)
+        obj.model, obj.comm, obj.K, obj.M = model, mpi_comm(comm), K, M
+        return obj
+
+    @property
+    def distributed(self) -> bool:
+        return self.comm is not None
+
+    def whole(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """``(K, M)`` as SciPy CSR on every rank, for the consumers that read the lattice whole
+        (the static equilibrium, the condensation): the matrices themselves when serial; when
+        distributed, the serial assembly on every rank, as those consumers always had (cheaper
+        in time and memory than gathering the PETSc rows: docs/benchmarks-notes-data.md).  Not
+        kept: the caller drops them when done."""
+        if not self.distributed:
+            return self.K, self.M
+        return assemble_scipy(self.model)
+
+    def destroy(self) -> None:
+        """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
+        if self.distributed:
+            for A in (self.K, self.M):
+                if A is not None:
+                    A.destroy()
+        self.K = self.M = None
+
+    def __enter__(self) -> "LatticeMatrices":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
 
 
 def row_band(model: LatticeModel, comm) -> tuple[int, int]:

@@ -23,7 +23,8 @@ import numpy as np
 
 from ...core.comm import mpi_comm
 from ...lcp.certificates import optimise_scaling, pd_certificate
-from ..condenser import Condenser, on_root
+from ..condenser import Condenser
+from ..on_root import on_root
 from .cover import Cover, cover
 
 
@@ -54,8 +55,8 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     """Prove that the MEiCP of ``pencil`` has no solution with σ in [0, σ_max].
 
     comm: the communicator (None: serial); collective.  pencil: a
-    :class:`~meicp.contact.problem.Pencil` (SciPy or distributed; only its ``model`` and
-    ``maps`` are read: the pieces K̃, M̃, N of the split pencil are rebuilt on every rank).
+    :class:`~meicp.contact.problem.Pencil` (SciPy or distributed; its ``maps`` and its
+    lattice's K, M are read: the pieces K̃, M̃, N of the split pencil are built on every rank).
     sigma_max: the caller's certified upper end of the window (no solution above it, e.g. by
     an inertia of sym(σ_max B − A)); 0 asks for σ = 0 only; ``inf`` is allowed (the last
     window is [σ_a, ∞)).  tol: relative margin every certificate must clear on top of its
@@ -75,7 +76,7 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
         raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
     if np.asarray(pencil.J).size == 0:
         return CondensedProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
-    with Condenser(comm, pencil.model, pencil.maps, method=method) as cond:
+    with Condenser.of(pencil, comm, method=method) as cond:
         return _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start)
 
 

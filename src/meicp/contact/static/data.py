@@ -20,11 +20,10 @@ from ...core.errors import ProblemError
 from ...lattice.model import LatticeModel
 from ...petsc.assembly import assemble
 from ...scene import Scene
+from ..lines import contact_lines
 
 #: rank tolerance (relative) of the rigid-mode and contact-restraint tests
 RANK_RTOL = 1e-9
-#: name of the rigid base's contact set (frictional interfaces go by their lower layer's name)
-BASE = "base"
 
 
 # --------------------------------------------------------------------------- loads
@@ -88,26 +87,28 @@ def body_force(model, load) -> np.ndarray:
 
 @dataclass
 class Contacts:
-    """Every contact of the scene, the base's first, then each frictional interface's."""
+    """Every contact of the scene, the base's first, then each frictional interface's: the
+    scene's contact lines (:func:`~meicp.contact.lines.contact_lines`) as linear functionals."""
 
-    labels: list          # (set name, column) per contact
-    sets: list            # (set name, first contact, end, μ)
+    labels: list          # (line name, column) per contact
+    sets: list            # (line name, first contact, end, μ)
     mu: np.ndarray
     A_n: sp.csr_matrix    # normal functional per contact (nc × ndof)
     A_t: sp.csr_matrix
 
 
-def contact_sets(scene, model) -> Contacts:
-    nx = model.nx
+def contact_functionals(lines, model) -> Contacts:
+    """The normal and tangential functionals of every contact of ``lines``: ``u_n`` (``u_t``)
+    of the contact node, or of the upper minus the lower node on a frictional interface."""
     rows_n, cols_n, vals, labels, sets, mu = [], [], [], [], [], []
     cols_t = []
-
-    def add(name, friction, lower, upper):
+    for line in lines:
         c0 = len(labels)
-        for i in range(nx):
+        upper, lower = line.upper, line.lower
+        for i in range(line.size):
             c = len(labels)
-            labels.append((name, i))
-            mu.append(friction)
+            labels.append((line.name, i))
+            mu.append(line.friction)
             if lower is None:
                 rows_n.append([c]); cols_n.append([2 * upper[i] + 1]); cols_t.append([2 * upper[i]])
                 vals.append([1.0])
@@ -115,13 +116,7 @@ def contact_sets(scene, model) -> Contacts:
                 rows_n.append([c, c]); cols_n.append([2 * upper[i] + 1, 2 * lower[i] + 1])
                 cols_t.append([2 * upper[i], 2 * lower[i]])
                 vals.append([1.0, -1.0])
-        sets.append((name, c0, len(labels), float(friction)))
-
-    if scene.boundary.bottom == "contact":
-        add(BASE, scene.contact.friction, None, model.contact_nodes())
-    for itf in scene.frictional_interfaces():
-        lower, upper = model.interface_node_pairs(itf.index)
-        add(itf.below, itf.friction, lower, upper)
+        sets.append((line.name, c0, len(labels), float(line.friction)))
     nc = len(labels)
     r = np.concatenate(rows_n) if nc else np.zeros(0, int)
     v = np.concatenate(vals) if nc else np.zeros(0)
@@ -263,17 +258,17 @@ class StaticData:
 
 
 def static_data(scene: Scene, model: LatticeModel, *, tol: float, allow_floating: bool,
-                timings: dict) -> StaticData:
+                timings: dict, lines=None, K=None) -> StaticData:
     """Assemble :class:`StaticData`; ProblemError for a bad load, a mechanism, or a rigid
     mode that neither the boundary nor a contact holds (``timings``: ``assemble`` and the
-    rigid-mode part of ``factor``)."""
+    rigid-mode part of ``factor``).  ``lines``: the scene's contact lines and ``K`` its SciPy
+    stiffness when the caller has them (an analysis builds both once), else built here."""
     t0 = time.perf_counter()
     presc, u_p, notes = prescribed_displacements(model, scene.load)
     f = body_force(model, scene.load)
-    K, _ = assemble(model)
-    K = K.tocsr()
+    K = (assemble(model)[0] if K is None else K).tocsr()
     free = model.free_dofs()
-    cts = contact_sets(scene, model)
+    cts = contact_functionals(contact_lines(scene, model) if lines is None else lines, model)
     A_nf = cts.A_n[:, free].tocsr()
     A_tf = cts.A_t[:, free].tocsr()
     held_n = np.diff(A_nf.indptr) == 0

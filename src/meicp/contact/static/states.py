@@ -9,7 +9,8 @@ import numpy as np
 from ...core.errors import ProblemError
 from ...core.results import SOLVED
 from ...scene import STATES
-from .data import BASE, StaticData
+from ..lines import BASE
+from .data import StaticData
 
 
 def settle(result, data: StaticData, u_f, r_n, r_t, load_response, certificate_tol: float) -> str:

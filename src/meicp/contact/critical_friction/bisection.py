@@ -1,0 +1,72 @@
+"""The cross-check of an enumerated critical friction on the σ-problem with the mass: a σ ≥ 0
+mode must exist just above μ_c, and where modes exist below it they must be born at σ > 0,
+each decided by enumerating the whole reduced pencil at that μ (every contact's μ set to it:
+:meth:`~meicp.contact.maps.ReducedSystem.with_friction`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...core.errors import ConvergenceError
+from ...eicp.enumeration import MAX_J
+from ...eicp.solve import solve_eicp
+from ..maps import grazing_cases, reduced_system
+from ..problem import pencil_of
+
+#: a σ ≥ 0 mode whose σ is above this multiple of max|A|/max|B| where modes start is born at
+#: σ > 0 (a pair of real σ out of a complex pair: flutter turning into divergence), not
+#: through σ = 0 — no contradiction of μ_c, which is about σ = 0
+BORN_ABOVE_ZERO = 1e-6
+
+
+def largest_sigma(lattice, lines, mu) -> float | None:
+    """The largest σ ≥ 0 of a mode with every contact's friction set to μ (enumeration; the
+    lattice's K, M, which μ does not change), relative to max|A|/max|B|; None without a mode."""
+    best = None
+    for case in grazing_cases(lines):
+        maps = reduced_system(lattice.model, lines, case).with_friction(mu)
+        pen = pencil_of(lattice, lines, case, maps=maps)
+        if pen.A is None:
+            continue  # every DOF held: no mode (as in analyze)
+        A, B = pen.A.toarray(), pen.B.toarray()
+        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=MAX_J)  # internal: no budget
+        if r.solutions:
+            sigma = max(sol.lam for sol in r.solutions) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
+            best = sigma if best is None else max(best, sigma)
+    return best
+
+
+def check_by_bisection(lattice, lines, mu_c, mu_max, tol) -> str:
+    """Existence of a σ ≥ 0 mode against μ_c: one just above it, and where modes exist below
+    it (or, without μ_c, at ``mu_max``) they must start at σ > 0 — a pair born there, not a
+    σ = 0 crossing that μ as an eigenvalue missed.  Returns a note for the evidence ("" when
+    modes start at μ_c); ConvergenceError on a contradiction."""
+    def sigma_at(mu):
+        return largest_sigma(lattice, lines, mu)
+
+    top = mu_c * (1 - 1e-6) - 1e-12 if np.isfinite(mu_c) else mu_max
+    if np.isfinite(mu_c) and sigma_at(mu_c * (1 + 1e-6) + 1e-12) is None:
+        raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
+                               "existence disagree")
+    sigma = None if top < 0 else sigma_at(top)
+    if sigma is None:
+        return ""
+    start, at_zero = 0.0, sigma_at(0.0)
+    if at_zero is not None:
+        sigma = at_zero
+    else:  # bisect down to where modes start, keeping the largest σ there
+        lo, hi = 0.0, top
+        while hi - lo > tol * max(1.0, hi):
+            mid = 0.5 * (lo + hi)
+            found = sigma_at(mid)
+            lo, hi, sigma = (lo, mid, found) if found is not None else (mid, hi, sigma)
+        start = hi
+    where = f"below μ_c = {mu_c:.8g}" if np.isfinite(mu_c) else f"with no σ = 0 mode up to μ = {mu_max:g}"
+    if sigma <= BORN_ABOVE_ZERO:
+        raise ConvergenceError(f"σ ≥ 0 modes start at μ ≈ {start:.8g} with σ ≈ 0, {where}: a σ = 0 crossing that "
+                               "μ as an eigenvalue missed")
+    if start == 0.0:  # without friction the pencil is symmetric: unstable already, no crossing involved
+        return (f"; divergence modes exist {where} already at μ = 0 (σ = {sigma:.3g}·max|A|/max|B|; enumeration "
+                "of the σ-problem)")
+    return (f"; divergence modes exist {where}, from μ ≈ {start:.8g}, born at σ = {sigma:.3g}·max|A|/max|B| > 0 "
+            "(a pair of real σ, not through σ = 0; enumeration of the σ-problem)")

@@ -1,0 +1,145 @@
+"""``critical_friction``: the smallest μ at which a σ = 0 divergence mode exists, as a
+certified bracket — the driver that picks the enumerated path (:mod:`.enumerated`), the
+bracket (:mod:`.bracket`) and the cross-check (:mod:`.bisection`) per grazing case, on one
+assembly of the lattice."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ...core.errors import ConvergenceError, ProblemError
+from ...core.machine import available_memory
+from ...lattice.model import LatticeModel
+from ...lattice.size import check_size
+from ...petsc.assembly import LatticeMatrices
+from ...core.comm import mpi_comm
+from ...scene import Scene
+from ..divergence import enumeration_is_small
+from ..maps import grazing_cases, reduced_system
+from ..problem import contact_states
+from .bisection import check_by_bisection
+from .bracket import bracket
+from .enumerated import condense_in_mu, friction_pencil, singular_message, smallest_mu
+from .result import EXACT_WIDTH, CriticalFriction
+
+log = logging.getLogger("meicp")
+
+#: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
+#: complementarity DOFs (order ≤ |J|) up to this many pairs: the enumeration's time grows
+#: geometrically with |J| (docs/benchmarks-notes-data.md); beyond it brackets μ_c
+#: (:mod:`.bracket`)
+CRITICAL_J = 20
+
+
+def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
+                      comm=None) -> CriticalFriction:
+    """The smallest μ ≥ 0 at which a σ = 0 divergence mode exists for the scene's states
+    (prescribed ones; with ``"solve"`` the states of the static equilibrium at the scene's μ),
+    one μ for every frictional contact, as a :class:`CriticalFriction`: a float (the upper
+    end, a μ with a certified mode; ``inf`` when none was found up to ``mu_max``) carrying
+    ``lower``, ``upper``, ``exact`` and ``evidence``.
+
+    scene: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction` also reads a file).
+    Solved as an EiCP in μ, condensed onto its complementarity DOFs
+    (docs/critical-friction.md).  Up to ``CRITICAL_J`` (20) complementarity pairs per grazing
+    case it is enumerated — all 2^|J| supports, exact — and the μ_c found is lifted back to
+    the whole reduced lattice and certified there.  Beyond, a bracket: the lower end is a
+    proof (diagonally scaled positive definiteness of the condensed S + μR on [0, lower]),
+    the upper end a σ = 0 mode found by a search on the condensed problem, lifted and
+    certified on the whole reduced lattice; condensations by MUMPS (collective on ``comm``;
+    None: this process alone).  The lattice is assembled once, in SciPy on every rank.
+
+    A motion of zero stiffness once the slip DOFs are eliminated — a floating body, or a
+    block free to slide as a whole — makes the μ-independent block singular.  If such a
+    motion is compatible with the slip directions (x_J ≥ 0) it is a σ = 0 motion at every μ
+    and μ_c is undefined: ProblemError.  If it is not (e.g. a layer between two sliding
+    contacts slipping in opposite directions), the enumeration meets singular pencils on
+    some supports, so the bisection check is then required (ProblemError if it is too large
+    for the default ``bisection=None``; a warning if ``bisection=False``); beyond CRITICAL_J
+    such a lattice is refused (the bracket needs the lattice held once the contacts are).
+
+    ``bisection``: cross-check of an enumerated μ_c on the σ-problem with the mass (a σ ≥ 0
+    mode must exist just above μ_c and none just below, each decided by enumerating the
+    whole reduced pencil; ConvergenceError if they disagree).  ``None`` (default): run it
+    when that enumeration is within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9
+    flops, about ≤ 9 pairs on ~150 reduced DOFs), skip it beyond; ``True``: always;
+    ``False``: never.  Never run for a bracket.
+    """
+    comm = mpi_comm(comm)
+    lattice, lines = _friction_states(scene)
+    K, M = lattice.K, lattice.M
+    ends, evidence = [], []
+    small, singular, enumerated = True, False, True
+    for case in grazing_cases(lines):
+        red = reduced_system(lattice.model, lines, case)
+        # every case counts: the bisection check enumerates the σ-problem of each, with or without J
+        small = small and enumeration_is_small(red.retained.size, red.J.size)
+        if red.J.size == 0:
+            continue
+        A1, B1 = friction_pencil(K, red)
+        if red.J.size <= CRITICAL_J:
+            mu, sing = smallest_mu(A1, B1, red.J, mu_max)
+            singular = singular or sing
+            ends.append((mu, mu))
+        else:
+            enumerated = False
+            lo, up, text = bracket(comm, red, K, M, A1, B1, mu_max)
+            ends.append((lo, up))
+            evidence.append(text)
+    lower = min((lo for lo, _ in ends), default=np.inf)
+    upper = min((up for _, up in ends), default=np.inf)
+    if enumerated:
+        if singular and bisection is None and not small:
+            raise ProblemError("critical_friction: a motion of zero stiffness is left once the slip DOFs are "
+                               "eliminated (not compatible with the slip directions), so the enumeration meets "
+                               "singular pencils and needs the bisection check, but the σ-problem is too large to "
+                               "enumerate; pass bisection=True to run it anyway, or hold the body")
+        note = ""
+        if bisection or (bisection is None and small):
+            note = check_by_bisection(lattice, lines, upper, mu_max, tol)
+        elif singular:
+            log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
+                        "certified but its minimality is not cross-checked", upper)
+        elif bisection is None:
+            log.info("critical_friction: bisection check skipped (the σ-problem is too large to enumerate)")
+        lower = mu_max if not np.isfinite(upper) else upper
+        text = ("every support of the condensed EiCP in μ enumerated" +
+                (f": no σ = 0 mode up to μ = {mu_max:g}" if not np.isfinite(upper) else
+                 ", the smallest μ certified on the whole reduced lattice") + note)
+        return CriticalFriction(upper, lower, True, text)
+    exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
+    return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
+
+
+def friction_pencils(scene):
+    """The σ = 0 EiCPs in μ of :func:`critical_friction`, condensed onto the
+    complementarity DOFs: one ``(Ac, Bc, J)`` per grazing case with a complementarity pair,
+    for ``(μ Bc − Ac) x = y`` (dense, order |J|).  Raises ProblemError if the μ-independent
+    block is singular.  Serial."""
+    lattice, lines = _friction_states(scene)
+    out = []
+    for case in grazing_cases(lines):
+        red = reduced_system(lattice.model, lines, case)
+        if red.J.size == 0:
+            continue
+        Ac, Bc, Jc, _, null = condense_in_mu(*friction_pencil(lattice.K, red), red.J)
+        if null.shape[1]:
+            raise ProblemError(singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular"))
+        out.append((Ac, Bc, Jc))
+    return out
+
+
+def _friction_states(scene) -> tuple[LatticeMatrices, tuple]:
+    """The lattice assembled once (SciPy, this process) and the contact lines with their
+    states resolved (static equilibrium if asked, on the same K)."""
+    if not isinstance(scene, Scene):
+        raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
+                           "(meicp.critical_friction also reads a scene file)")
+    check_size(scene, memory=available_memory())  # serial SciPy: this process, no PETSc indices
+    lattice = LatticeMatrices(LatticeModel(scene))
+    lines, static = contact_states(scene, lattice)
+    if lines is None:
+        raise ConvergenceError(f"static equilibrium failed: {static.message}", static)
+    return lattice, lines
