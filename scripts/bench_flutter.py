@@ -10,8 +10,8 @@ sides free, every base node slip+), μ = 2.
 
 ``accuracy`` (serial): the fastest flutter mode of meicp's flutter analysis of the sliding
 pencil (:func:`meicp.contact.flutter.pencil_flutter`, the path ``analyze`` takes: dense up to
-``DENSE_MAX`` retained DOFs, else the search), and of the large-scale search forced
-(``dense_max=0``; and the dense path forced above ``DENSE_MAX``), against LAPACK's eigenvalues of the same pencil (``scipy.linalg.eigvals``
+``FLUTTER_DENSE_MAX`` retained DOFs, else the search), and of the large-scale search forced
+(``dense_max=0``; and the dense path forced above ``FLUTTER_DENSE_MAX``), against LAPACK's eigenvalues of the same pencil (``scipy.linalg.eigvals``
 of D^{-1/2} A D^{-1/2}, B = D diagonal) and numpy's complex square root: relative errors of
 growth rate and frequency.  → ``flutter_accuracy.csv``.
 
@@ -41,6 +41,7 @@ from bench_common import Stage, csv_path, halves, lattice_shape, slepc_eigensolv
 from meicp.contact import flutter as fl
 from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
+from meicp.core import limits
 from meicp.examples import two_layer_scene
 
 MU = 2.0
@@ -77,7 +78,7 @@ def accuracy(sizes) -> None:
         with pencil(scene) as pen:
             g_ref, f_ref, t_ref = qz_fastest(pen.A, pen.B)
             paths = [("analyze", {}), ("search forced", {"dense_max": 0})]
-            if pen.maps.retained.size > fl.DENSE_MAX:
+            if pen.maps.retained.size > limits.FLUTTER_DENSE_MAX:
                 paths.append(("dense forced", {"dense_max": 10 ** 9}))
             for path, kw in paths:
                 t0 = time.perf_counter()

@@ -11,6 +11,7 @@ import pytest
 
 import meicp.contact.critical_friction.solve as cf
 from meicp.contact.critical_friction import CriticalFriction, critical_friction
+from meicp.core import limits
 
 from meicp.examples import two_layer_scene
 
@@ -22,7 +23,7 @@ def test_the_bracket_contains_the_enumerated_critical_friction(nx, states, shear
     scene = two_layer_scene(nx, (2, 2), mu=1.0, states=states, shear=shear)
     exact = critical_friction(scene, bisection=False)
     assert exact.exact and exact.lower == exact.upper == float(exact)
-    monkeypatch.setattr(cf, "CRITICAL_J", 0)  # force the bracket on a scene enumeration can check
+    monkeypatch.setattr(limits, "CRITICAL_J", 0)  # force the bracket on a scene enumeration can check
     b = critical_friction(scene)
     assert b.lower <= b.upper and "lower end" in b.evidence
     if math.isfinite(exact):
@@ -97,7 +98,7 @@ def test_the_bracket_contains_the_enumerated_value_on_shipped_scenes(name, monke
 
     scene = meicp.load_scene(Path(__file__).resolve().parents[1] / "data" / "scenes" / f"{name}.toml")
     exact = critical_friction(scene, bisection=False)
-    monkeypatch.setattr(cf, "CRITICAL_J", 0)
+    monkeypatch.setattr(limits, "CRITICAL_J", 0)
     b = critical_friction(scene)
     assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
 

@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import meicp
+from meicp.core import limits
 from meicp.core.errors import ProblemError, SolverNotFound
 from meicp.eicp.problem import EiCPProblem, certify_pair
 
@@ -265,4 +266,4 @@ def test_enumeration_by_name_is_refused_by_its_work_before_any_solve():
     budget.check_enumeration_work(16, 312, "max_j")  # about an hour: accepted
     with pytest.raises(ProblemError):
         budget.check_enumeration_work(16, 313, "max_j")
-    assert budget.ENUMERATE_MAX_FLOPS * budget.SECONDS_PER_FLOP <= 1.2 * 3600
+    assert limits.ENUMERATE_MAX_FLOPS * limits.SECONDS_PER_FLOP <= 1.2 * 3600

@@ -15,6 +15,7 @@ import meicp
 from meicp.contact import flutter as fl
 from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
+from meicp.core import limits
 from meicp.core.errors import ProblemError
 from meicp.io.scene import scene_from_dict
 from meicp.core.matrix import to_dense
@@ -284,11 +285,11 @@ def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity,
 
 
 def test_large_pencils_start_above_the_cluster(monkeypatch):
-    """From OFF_CLUSTER_FROM retained DOFs the proxy's target is moved up before the first
+    """From FLUTTER_OFF_CLUSTER_FROM retained DOFs the proxy's target is moved up before the first
     solve (one factorisation instead of two where it lies in a cluster), with a basis of
     OFF_CLUSTER_NCV and a block-low-rank factor; the modes it certifies are QZ's."""
-    monkeypatch.setattr(fl, "OFF_CLUSTER_FROM", 50)
-    monkeypatch.setattr(fl, "SEARCH_LARGE", 50)
+    monkeypatch.setattr(limits, "FLUTTER_OFF_CLUSTER_FROM", 50)
+    monkeypatch.setattr(limits, "FLUTTER_SEARCH_LARGE", 50)
     seen = []
     real = fl.search_flutter
 

@@ -12,7 +12,7 @@ from meicp.contact.maps import grazing_cases, reduced_system
 from meicp.contact.problem import contact_states
 from meicp.core.errors import ProblemError
 from meicp.io.scene import loads_scene
-from meicp.eicp.enumeration import MAX_J
+from meicp.core import limits
 from meicp.eicp.solve import solve_eicp
 from meicp.petsc.assembly import LatticeMatrices, assemble
 from meicp.lattice.model import LatticeModel
@@ -239,7 +239,7 @@ def _uncondensed_critical_friction(scene, mu_max=1e3):
         if red.J.size:
             A1, B1 = friction_pencil(lattice.K, red)
             r = solve_eicp(A1.toarray(), B1.toarray(), J=red.J, method="enumerate", lam_min=0.0, tol=1e-9,
-                           max_j=MAX_J)
+                           max_j=limits.EICP_MAX_J)
             mus += [s.lam for s in r.solutions if 0.0 <= s.lam <= mu_max]
     return min(mus)
 
@@ -280,9 +280,8 @@ def test_zero_stiffness_motion_along_the_slip_directions_is_refused():
 
 
 def test_critical_friction_beyond_the_enumeration_limit_is_a_bracket():
-    from meicp.contact.critical_friction import CRITICAL_J
 
-    wide = TWO_LAYERS.replace("nx = 5", f"nx = {CRITICAL_J + 1}")
+    wide = TWO_LAYERS.replace("nx = 5", f"nx = {limits.CRITICAL_J + 1}")
     mu = critical_friction(loads_scene(wide))
     assert mu.lower <= mu == mu.upper < np.inf and "lower end" in mu.evidence
 

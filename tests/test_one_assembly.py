@@ -11,6 +11,7 @@ import pytest
 import meicp
 import meicp.contact.critical_friction.solve as cf
 import meicp.lattice.assembly as lattice_assembly
+from meicp.core import limits
 import meicp.petsc.assembly as petsc_assembly
 from meicp.examples import two_layer_scene
 from meicp.io.scene import loads_scene
@@ -55,10 +56,10 @@ def test_analyze_with_static_states_assembles_once(assemblies):
 
 @pytest.mark.parametrize("bracket", [False, True])
 def test_critical_friction_assembles_once(assemblies, monkeypatch, bracket):
-    """Enumerated with its bisection check, or (CRITICAL_J = 0) the bracket with its
+    """Enumerated with its bisection check, or (limits.CRITICAL_J = 0) the bracket with its
     condensation; the states from the static equilibrium."""
     if bracket:
-        monkeypatch.setattr(cf, "CRITICAL_J", 0)
+        monkeypatch.setattr(limits, "CRITICAL_J", 0)
     scene = two_layer_scene(9, (2, 2), mu=0.6, states="solve", load=(0.05, -0.1))
     mu = meicp.critical_friction(scene)
     assert mu.lower <= mu.upper

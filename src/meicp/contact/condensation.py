@@ -222,7 +222,7 @@ def from_bordered_schur(pieces: PencilPieces, sigma: float, X: np.ndarray, relat
     R = np.array(X[nJ:, :nJ])
     Z = -0.5 * (X[nJ:, nJ:] + X[nJ:, nJ:].T)
     # only the J × J blocks, rows J first: σM̃ + K̃ over every row is not free at every σ
-    # (docs/benchmarks-notes-data.md)
+    # (docs/benchmarks-notes.md)
     Hs_JJ = (sigma * pieces.Mt[J] + pieces.Kt[J]).tocsc()[:, J]
     P_JJ = (sigma * pieces.NM[J] + pieces.N[J]).tocsc()[:, J]
     KK = Hs_JJ.toarray() - S

@@ -24,7 +24,7 @@ Two ways (``method``):
   :func:`~.condenser_certificates.estimate_lambda_min`, :meth:`Condenser.sharper_tau`: only
   this fallback uses them).
 
-``"auto"``: solves while |F|·|J| ≤ ``SOLVES_LIMIT`` and the mass is diagonal, else Schur.
+``"auto"``: solves while |F|·|J| ≤ ``limits.SOLVES_LIMIT`` and the mass is diagonal, else Schur.
 Collective on ``comm`` (every rank holds the SciPy pieces, built from the whole SciPy K and M
 of the analysis' one assembly, :meth:`Condenser.of`; MUMPS factors them distributed).  The
 certificates themselves are in :mod:`.condenser_certificates`.
@@ -39,6 +39,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from ..core import limits
 from ..lattice.node_blocks import NodeBlocks, node_of
 from ..petsc.comm import to_petsc_comm
 from ..petsc.eigen import inverse_estimate
@@ -52,8 +53,6 @@ from .condenser_certificates import (TAU_EPS, certified_tau, estimate_lambda_min
 
 log = logging.getLogger("meicp")
 
-#: ``method="auto"`` condenses by solves (rigorous error bound) while |F|·|J| stays below this
-SOLVES_LIMIT = 2e7
 #: MUMPS' INFOG(1) for a numerically singular matrix
 SINGULAR = -10
 
@@ -77,7 +76,7 @@ class Condenser:
         self.pad_FF = NodeBlocks(nodes[F]).pad
         self.pad_bordered = NodeBlocks(np.concatenate([nodes, nodes.max(initial=-1) + 1 + np.arange(J.size)])).pad
         if method == "auto":
-            method = "solves" if F.size * J.size <= SOLVES_LIMIT and self._diagonal_FF() else "schur"
+            method = "solves" if F.size * J.size <= limits.SOLVES_LIMIT and self._diagonal_FF() else "schur"
         self.method = method
         self.tau: float | None = None
         self.relative_error: float | None = None
@@ -120,7 +119,7 @@ class Condenser:
     @cached_property
     def blocks_FF(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """``(K̃_FF, M̃_FF)``, sliced once: the held proof, the sharper τ and the choice of method
-        all read them, and a slice is not free at scale (docs/benchmarks-notes-data.md)."""
+        all read them, and a slice is not free at scale (docs/benchmarks-notes.md)."""
         F = self.pieces.F
         return self.pieces.Kt[F][:, F].tocsr(), self.pieces.Mt[F][:, F].tocsr()
 
@@ -185,7 +184,7 @@ class Condenser:
 
         Two factorisations (three where t = ½·estimate is not certified); the PETSc way made
         three, each with its analysis (held factor, G(0) and the sharper τ; the cost of each way
-        is in docs/benchmarks-notes-data.md).
+        is in docs/benchmarks-notes.md).
         The solves with K̃_FF are always kept (``keep_factor`` costs nothing here): used after
         the series has factored another matrix, they factor 𝓗(0) again first."""
         clock = time.perf_counter()

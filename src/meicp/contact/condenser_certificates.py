@@ -19,7 +19,7 @@ PROBE_SAFETY = 100.0
 #: floor of the charged relative error of a Schur complement (MUMPS' backward error level)
 SCHUR_ERROR_FLOOR = 1e-13
 #: SLEPc options of the estimate of λ_min(K̃_FF, M̃_FF) (half of it is certified): two digits
-#: are plenty — a tighter tolerance costs solves for the same τ (docs/benchmarks-notes-data.md)
+#: are plenty — a tighter tolerance costs solves for the same τ (docs/benchmarks-notes.md)
 TAU_EPS = {"eps_tol": 1e-2, "eps_ncv": 6, "eps_purify": False}
 #: iterative refinement steps of a solve with K̃_FF on a nearby factor (:func:`refined_solve`)
 REFINE_STEPS = 4
@@ -90,7 +90,7 @@ def certified_tau(comm, KFF, MFF, *, pad=None) -> tuple[float | None, str]:
     with destroying(mat_from_scipy(comm, pad(KFF)), mat_from_scipy(comm, MFF)) as (Kp, Mp):
         try:
             # half the estimate is certified below: a loose tolerance, a short basis and no
-            # purification of the vector are enough (TAU_EPS; docs/benchmarks-notes-data.md)
+            # purification of the vector are enough (TAU_EPS; docs/benchmarks-notes.md)
             pairs = solve_ghep(Kp, Mp, nev=1, target=0.0, options=TAU_EPS)
             est = float(pairs.values[0])
             for v in pairs.vectors:

@@ -12,7 +12,7 @@ every branch has it, excluded only when none has it.
 Two paths, both ending in :class:`~meicp.contact.result.FlutterMode` s with their
 backward errors (a mode above :data:`RESIDUAL_TOL` is never reported):
 
-- **dense** (retained DOFs ≤ :data:`DENSE_MAX`): every eigenvalue by LAPACK (QR on
+- **dense** (retained DOFs ≤ :data:`~meicp.core.limits.FLUTTER_DENSE_MAX`): every eigenvalue by LAPACK (QR on
   D^{-1/2}AD^{-1/2} when B = D is diagonal, else QZ), each with the rounding radius
   ``r = n·u·(‖A‖₁ + |σ|‖B‖₁)·κ(σ)``, κ from the left and right eigenvectors: non-real when
   |Im σ| > r; certified real when |Im σ| ≤ r and its disk meets no other; else borderline.
@@ -37,6 +37,7 @@ import numpy as np
 import scipy.linalg as sl
 import scipy.sparse as sp
 
+from ..core import limits
 from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
@@ -48,9 +49,6 @@ from .result import FlutterMode, growth_frequency
 
 log = logging.getLogger("meicp")
 
-#: dense QZ up to this many retained DOFs: its time grows as n³, to minutes past this
-#: (docs/benchmarks-notes.md, "DENSE_MAX")
-DENSE_MAX = 2500
 #: a flutter mode's backward error must be at most this to be reported
 RESIDUAL_TOL = 1e-10
 #: large-scale path: |Im σ| must exceed MARGIN·η·(‖A‖₁/‖B‖₁ + |σ|) (η the backward error)
@@ -61,20 +59,12 @@ MARGIN = 1e6
 SEARCH_TARGETS = 3
 SEARCH_NEV = 4
 SEARCH_NCV = 16
-#: at and above this many retained DOFs one target with nev 2, ncv 12, SLEPc tol 1e-10 and a
-#: block-low-rank factor (LOW_RANK_TOL; the residual gate stays 1e-10): the search then costs a
-#: few eigen-solves of the pencil (docs/benchmarks-notes-data.md)
-SEARCH_LARGE = 50_000
 #: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
 #: next to the contact for it to count as contact-localised
 PROXY_NX = 32
 PROXY_ROWS = 8
 PROXY_LOCALISED = 0.6
 PROXY_NEAR_ROWS = 3
-#: memory the search adds per retained DOF, all ranks together (the factor of the 2n real form,
-#: measured and rounded up: docs/benchmarks-notes.md, "SEARCH_BYTES_PER_DOF"); it is skipped when
-#: that is not available
-SEARCH_BYTES_PER_DOF = 10_000
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
 #: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
@@ -84,13 +74,8 @@ SAME = 1e-9
 #: (docs/benchmarks-notes.md, "OFF_CLUSTER")
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
-#: from this many retained DOFs the search *starts* off the cluster (at off_cluster(τ, 0)), with a
-#: Krylov basis of 16 (32 on the 2n form): past it the proxy's σ lay inside the cluster, and
-#: above the cluster a basis of 16 converges in far fewer restarts than one of 12
-#: (docs/benchmarks-notes.md, "OFF_CLUSTER_FROM")
-OFF_CLUSTER_FROM = 200_000
 OFF_CLUSTER_NCV = 16
-#: from SEARCH_LARGE retained DOFs the shifted pencil is factored block-low-rank at this
+#: from limits.FLUTTER_SEARCH_LARGE retained DOFs the shifted pencil is factored block-low-rank at this
 #: dropping tolerance (MUMPS CNTL(7)): faster, with the certified pairs' backward errors as
 #: without it (docs/benchmarks-notes.md, "LOW_RANK_TOL")
 LOW_RANK_TOL = 1e-10
@@ -385,7 +370,7 @@ def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[compl
     return targets
 
 
-def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options: dict | None = None,
+def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, options: dict | None = None,
                    targets=None, **search) -> PencilFlutter:
     """The flutter analysis of one sliding pencil ``pen`` (a
     :class:`~meicp.contact.problem.Pencil`, every contact state resolved): dense up to
@@ -395,12 +380,12 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
     n = int(pen.maps.retained.size)
     if n == 0:
         return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True)
-    if n <= dense_max:
+    if n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max):
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
         if comm is None or comm_size(comm) == 1:
             return dense_flutter(A, B)
         return comm.bcast(dense_flutter(A, B) if comm.Get_rank() == 0 else None, root=0)
-    need = SEARCH_BYTES_PER_DOF * n
+    need = limits.FLUTTER_SEARCH_BYTES_PER_DOF * n
     memory, where = available_memory_on(comm, need)
     if memory is not None and need > memory:
         return PencilFlutter(None, evidence=(
@@ -409,11 +394,13 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
     why = ""
     if targets is None:
         base = next((line.states for line in pen.lines if line.name == BASE), ())
-        targets = proxy_targets(scene, list(base), 1 if n >= SEARCH_LARGE else SEARCH_TARGETS) if base else []
+        count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
+        targets = proxy_targets(scene, list(base), count) if base else []
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
-        if targets and n >= OFF_CLUSTER_FROM:
+        if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM:
             moved = [off_cluster(t, 0) for t in targets]
-            why += (f", each moved up off its cluster before the first solve ({n:,} ≥ {OFF_CLUSTER_FROM:,} retained "
+            why += (f", each moved up off its cluster before the first solve ({n:,} ≥ "
+                    f"{limits.FLUTTER_OFF_CLUSTER_FROM:,} retained "
                     "DOFs: the proxy's σ lies inside a cluster of ill-conditioned eigenvalues at this size): "
                     + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i → {m.real:.4g}{m.imag:+.4g}i"
                                 for t, m in zip(targets, moved)))
@@ -422,7 +409,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int = DENSE_MAX, options
         if not targets:
             targets = lambda_line_targets(0.05, np.linspace(0.5, 2.5, 3))
             why = " on the λ-line Re λ = 0.05, ω = 0.5 … 2.5 (no proxy for this scene)"
-    if n >= SEARCH_LARGE:
+    if n >= limits.FLUTTER_SEARCH_LARGE:
         search.setdefault("nev", 2)
         search.setdefault("ncv", 12)
         search.setdefault("tol", 1e-10)
@@ -473,6 +460,6 @@ def not_analysed(reason: str) -> FlutterVerdict:
     return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
 
 
-__all__ = ["DENSE_MAX", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
+__all__ = ["RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
            "analyze_flutter", "dense_flutter", "grazing_branches", "lambda_line_targets", "pencil_flutter",
            "proxy_targets", "search_flutter"]

@@ -37,11 +37,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..core import limits
 from ..core.errors import ProblemError
 from .lines import ContactLine, ContactState
 
-#: how many grazing contacts' tangential cases (3 each) may be enumerated
-MAX_GRAZING = 6
 #: the tangential cases of a grazing contact
 TANGENTIAL_CASES = (ContactState.STICK, ContactState.SLIP_PLUS, ContactState.SLIP_MINUS)
 
@@ -100,9 +99,9 @@ def grazing_cases(lines: list[ContactLine]):
     (line index, contact index, case) with case a :data:`TANGENTIAL_CASES` state."""
     grazing = [(s, i) for s, line in enumerate(lines) for i, st in enumerate(line.states)
                if st is ContactState.GRAZING]
-    if len(grazing) > MAX_GRAZING:
+    if len(grazing) > limits.MAX_GRAZING:
         raise ProblemError(f"{len(grazing)} grazing contacts: their 3^{len(grazing)} tangential cases are "
-                           f"too many to enumerate (limit {MAX_GRAZING}); prescribe their states")
+                           f"too many to enumerate (limit {limits.MAX_GRAZING}); prescribe their states")
     for cases in itertools.product(TANGENTIAL_CASES, repeat=len(grazing)):
         yield tuple((s, i, c) for (s, i), c in zip(grazing, cases))
 

@@ -19,14 +19,13 @@ import numpy as np
 import scipy.linalg as sl
 import scipy.sparse.linalg as spl
 
+from ..core import limits
 from ..eicp.problem import EiCPProblem, certify_pair
 from ..lcp.certificates import (certified_mu_lower_bound, chain_mu_lower_bound, mu_bar, optimise_mu_scaling,
                                 pd_certificate)
 
 #: longest run of consecutive contacts tried as a support (modes localise at free edges)
 MAX_RUN = 16
-#: largest support the active set solves densely (the full support is the shift-and-invert's)
-ACTIVE_SET_MAX = 300
 #: certificate residual a condensed candidate must reach before it is lifted
 CANDIDATE_TOL = 1e-9
 
@@ -109,7 +108,7 @@ def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float
                      good_enough: float = 0.0, seconds: float = np.inf) -> list:
     """Certified condensed σ = 0 modes ``[(μ, x)]`` with μ ≤ mu_max, smallest μ first.  The
     cheap sources first (the full support, the runs); the active-set starts (dense
-    eigen-solves on supports of at most ``ACTIVE_SET_MAX`` contacts) only while no candidate
+    eigen-solves on supports of at most ``limits.MU_ACTIVE_SET_MAX`` contacts) only while no candidate
     ≤ ``good_enough`` is certified (e.g. just above the proved lower end: nothing smaller
     can exist) and for at most ``seconds``."""
     deadline = time.perf_counter() + seconds
@@ -135,7 +134,7 @@ def upper_candidates(S: np.ndarray, R: np.ndarray, *, near: float, mu_max: float
             s = np.zeros(n)
             s[idx] = 1.0
             starts.append(s)
-    for s in starts + ([None] if n <= ACTIVE_SET_MAX else []):
+    for s in starts + ([None] if n <= limits.MU_ACTIVE_SET_MAX else []):
         if (out and min(mu for mu, _ in out) <= good_enough) or time.perf_counter() > deadline:
             break
         take([_active_set(S, R, s)])
@@ -204,7 +203,7 @@ def _active_set(S, R, start, max_iter: int = 20):
     T = np.arange(n) if start is None else np.flatnonzero(start > 1e-3 * np.abs(start).max())
     seen = set()
     for _ in range(max_iter):
-        if T.size == 0 or T.size > ACTIVE_SET_MAX or tuple(T) in seen:
+        if T.size == 0 or T.size > limits.MU_ACTIVE_SET_MAX or tuple(T) in seen:
             break
         seen.add(tuple(T))
         w, V = sl.eig(-R[np.ix_(T, T)], S[np.ix_(T, T)])

@@ -9,7 +9,7 @@ freed small blocks, e.g. a block-low-rank MUMPS factor's, in its heap) is not se
 ``reclaim=True`` hands it back first (:func:`release_free_heap`) — a search after a large
 factorisation was refused with several GiB of the process's own free heap uncounted.  Not
 by default: memory kept is memory not faulted in again, and faulting it in again is slow
-at scale (docs/benchmarks-notes-house.md).
+at scale (docs/benchmarks-notes.md).
 """
 
 from __future__ import annotations

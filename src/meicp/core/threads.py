@@ -4,7 +4,7 @@ NumPy/SciPy's OpenBLAS starts one thread per core.  meicp's dense phases — the
 divergence certificates, the critical friction's bracket, the enumeration of supports — are
 hundreds of eigen-solves of order 10 to 10³ in a loop.  A second thread gains them little on
 an idle machine, and on a busy one threads spinning against other processes made them many
-times slower (docs/benchmarks-notes-house.md, core).  So these phases run
+times slower (docs/benchmarks-notes.md, core).  So these phases run
 with ``MEICP_BLAS_THREADS`` threads (default 1) through threadpoolctl, the way scikit-learn
 bounds its BLAS; the sparse factorisations (MUMPS) and the flutter analysis's single large
 QZ keep the process's setting.  threadpoolctl comes from Debian (``make setup``).

@@ -10,15 +10,9 @@ work itself is checked before anything is solved, in ``analyze(method="enumerate
 
 from __future__ import annotations
 
+from ..core import limits
 from ..core.errors import ProblemError
 
-#: seconds per unit of 2^|J|·r³ of a whole enumeration (one core, one BLAS thread): the
-#: pessimistic middle of the measured range, so that a refused enumeration would really have
-#: taken too long (the measurements: docs/benchmarks-notes-house.md, eicp)
-SECONDS_PER_FLOP = 2e-9
-#: the largest 2^|J|·r³ an enumeration by name may start: about an hour at SECONDS_PER_FLOP
-#: (16 pairs up to r ≈ 310, 20 pairs up to r ≈ 125, 24 pairs up to r ≈ 50)
-ENUMERATE_MAX_FLOPS = 2e12
 
 
 def enumeration_work(n_j: int, r: int) -> float:
@@ -37,13 +31,13 @@ def duration(t: float) -> str:
 
 def check_enumeration_work(n_j: int, r: int, override: str) -> None:
     """ProblemError before any work when 2^n_j eigen-solves of order r exceed
-    ENUMERATE_MAX_FLOPS; ``override`` names how the caller may accept the cost."""
+    limits.ENUMERATE_MAX_FLOPS; ``override`` names how the caller may accept the cost."""
     work = enumeration_work(n_j, r)
-    if work <= ENUMERATE_MAX_FLOPS:
+    if work <= limits.ENUMERATE_MAX_FLOPS:
         return
     raise ProblemError(
         f"method 'enumerate' solves 2^|J| dense eigen-problems of order up to r: |J| = {n_j}, r = {r} is about "
-        f"{work:.1e} flops (2^|J|·r³, ~{duration(work * SECONDS_PER_FLOP)} on one core), past the limit of "
-        f"{ENUMERATE_MAX_FLOPS:.0e} (~{duration(ENUMERATE_MAX_FLOPS * SECONDS_PER_FLOP)}, "
-        f"meicp.eicp.budget.ENUMERATE_MAX_FLOPS); use method='auto' or method='active-set', which decide "
+        f"{work:.1e} flops (2^|J|·r³, ~{duration(work * limits.SECONDS_PER_FLOP)} on one core), past the limit of "
+        f"{limits.ENUMERATE_MAX_FLOPS:.0e} (~{duration(limits.ENUMERATE_MAX_FLOPS * limits.SECONDS_PER_FLOP)}, "
+        f"meicp.core.limits.ENUMERATE_MAX_FLOPS); use method='auto' or method='active-set', which decide "
         f"without visiting every support, or accept the cost with {override}")

@@ -45,6 +45,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
+from ..core import limits
 from ..core.errors import ProblemError
 from ..core.progress import Progress
 from ..core.threads import dense_phase
@@ -52,7 +53,6 @@ from ..core.validation import is_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certificate_parts, lam_floor
 from .scaling import PencilScaling, refine_pair
 
-MAX_J = 24
 #: supports solved per stack (bounds memory: BATCH · |R|² doubles several times)
 BATCH = 20000
 
@@ -376,9 +376,10 @@ class _Enumerator:
 
 
 def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=None, lam_max=None,
-                   max_j: int = MAX_J, comm=None, **_ignored) -> EiCPResult:
+                   max_j: int | None = None, comm=None, **_ignored) -> EiCPResult:
     """Every solution with ``lam_min ≤ λ ≤ lam_max``; collective on ``comm`` if given."""
     J = problem.J
+    max_j = limits.EICP_MAX_J if max_j is None else max_j
     if J.size > max_j:
         raise ProblemError(f"enumerate visits 2^|J| supports: |J| = {J.size} > max_j = {max_j}")
     if problem.n - J.size > 2000:
@@ -392,7 +393,7 @@ def enumerate_eicp(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, lam_min=No
     # this rank's share of the supports, and their cost for the estimate of the time left: a
     # support of size k is a dense eigen-solve of order |F| + k, batched, whose time grows
     # about linearly with the order (the batches' overhead), not as its cube
-    # (docs/benchmarks-notes-house.md, eicp)
+    # (docs/benchmarks-notes.md, eicp)
     share = [len(range(rank, math.comb(J.size, k), size)) for k in range(J.size + 1)]
     cost = [float(share[k]) * (problem.F.size + k) for k in range(J.size + 1)]
     progress = Progress("enumeration" + (f" (rank 0's share on {size} ranks)" if size > 1 else ""),

@@ -30,6 +30,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..core import limits
 from ..core.errors import ProblemError
 from ..core.matrix import is_petsc_mat, matrix_shape, matvec, max_abs_entry, row_max_abs, to_dense
 from ..core.results import Result
@@ -39,8 +40,6 @@ from ..core.validation import as_index_set, as_int, as_matrix, as_real, check_to
 DEFAULT_TOL = 1e-10
 #: x_j above this (relative to ‖x‖∞) counts as in the support
 SUPPORT_TOL = 1e-9
-#: the largest max_j accepted: 2^26 supports already take hours (a larger one is a hang)
-MAX_ENUMERATED = 26
 #: rounding allowance of a λ lower bound, in units of eps·(|lam_min| + max|A|/max|B|)
 LAM_ROUNDING = 1e3
 
@@ -240,7 +239,7 @@ def check_options(*, tol, lam_min=None, **kwargs) -> None:
     if lam_min is not None and kwargs.get("lam_max") is not None and kwargs["lam_max"] < lam_min:
         raise ProblemError(f"lam_max = {kwargs['lam_max']!r} is below lam_min = {lam_min!r}")
     for name, minimum, maximum in (("nev", 1, None), ("max_iter", 1, None), ("give_up_after", 1, None),
-                                   ("max_j", 0, MAX_ENUMERATED),
+                                   ("max_j", 0, limits.MAX_ENUMERATED),
                                    ("n_starts", 1, None), ("memory", 1, None)):
         if kwargs.get(name) is not None:
             as_int(kwargs[name], name, minimum=minimum, maximum=maximum)

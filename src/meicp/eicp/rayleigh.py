@@ -40,14 +40,13 @@ import scipy.linalg as la
 import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
+from ..core import limits
 from ..core.errors import ProblemError
 from ..core.matrix import to_dense, to_scipy
 from ..core.validation import check_spd, check_symmetric
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, EiCPSolution, certify_pair
 from .scaling import normalised, restore, scaled_value
 
-#: above this reduced size the polishing eigen-solve is sparse (eigsh with a shift)
-DENSE_POLISH_LIMIT = 2000
 #: how many aligned eigenpairs of the reduced pencil one polish certifies at most
 POLISH_CANDIDATES = 3
 #: SPG iterations with an unchanged support before a polish is tried mid-run
@@ -385,7 +384,7 @@ class _Polisher:
         B_RR = _submatrix(self.B, R)
         x_R = x[R]
         r = float(x @ (self.A @ x)) / float(x @ (self.B @ x))
-        if R.size <= DENSE_POLISH_LIMIT:
+        if R.size <= limits.DENSE_POLISH_LIMIT:
             lams, vecs = la.eigh(to_dense(A_RR), to_dense(B_RR))
         else:
             k = min(6, R.size - 1)

@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from ..core import limits
 from ..core.comm import mpi_comm
 from ..core.errors import PetscOptionError, ProblemError, SolverNotFound
 from ..core.matrix import is_symmetric, matrix_comm
@@ -31,14 +32,6 @@ from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
 from .rayleigh import rayleigh
 
-#: auto enumerates when |J| and n are at most these (2^16 supports; what they cost:
-#: docs/benchmarks-notes-layering.md)
-AUTO_ENUMERATE_J = 16
-AUTO_ENUMERATE_N = 400
-#: auto tries rayleigh up to this n: SPG needs only products, but from 8 starts of up to
-#: 5000 iterations each, and its SPD check of a non-diagonal B is a dense Cholesky; past it
-#: the SLEPc active-set search leads
-AUTO_RAYLEIGH_N = 5000
 #: above this certificate tolerance a certified λ can be far from any solution: at tol
 #: 1e-2 the speed-against-accuracy benchmark found certified λ off by up to 37 %
 LOOSE_TOL = 1e-6
@@ -74,7 +67,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
     complementarity indices (default all: the EiCP).  all_solutions: enumerate every
     solution (small |J| only).  lam_min: only solutions with λ ≥ lam_min.  tol: relative
     certificate tolerance.  comm: split the enumeration across its ranks.  ``enumerate``
-    (by name or all_solutions) is refused before any work past ``budget.ENUMERATE_MAX_FLOPS``
+    (by name or all_solutions) is refused before any work past ``limits.ENUMERATE_MAX_FLOPS``
     (about an hour) unless ``max_j`` is given.  Other keywords go to the method (``target``,
     ``nev``, ``max_iter``, ``options``...; ``auto`` hands them to every method it runs).
     ``method="auto"`` runs the portfolio of :func:`auto_order` and records each method's
@@ -114,17 +107,17 @@ def _run(method: str, problem: EiCPProblem, kw: dict) -> EiCPResult:
 def auto_order(problem: EiCPProblem) -> list[str]:
     """The methods ``auto`` tries, in order, for this problem.
 
-    ``enumerate`` when |J| ≤ AUTO_ENUMERATE_J and n ≤ AUTO_ENUMERATE_N (its answer, solutions
+    ``enumerate`` when |J| ≤ limits.AUTO_ENUMERATE_J and n ≤ limits.AUTO_ENUMERATE_N (its answer, solutions
     or a proof that there are none, is final); ``rayleigh`` when the pencil is serial,
-    n ≤ AUTO_RAYLEIGH_N and A, B are symmetric (it checks B SPD itself: a ProblemError is
+    n ≤ limits.AUTO_RAYLEIGH_N and A, B are symmetric (it checks B SPD itself: a ProblemError is
     recorded as ``not_applicable``); ``active-set``; ``semismooth`` unless the pencil is
     distributed over several ranks (it is serial).
     """
     order = []
-    if problem.J.size <= AUTO_ENUMERATE_J and problem.n <= AUTO_ENUMERATE_N and not problem.distributed:
+    if problem.J.size <= limits.AUTO_ENUMERATE_J and problem.n <= limits.AUTO_ENUMERATE_N and not problem.distributed:
         order.append("enumerate")
     serial = matrix_comm(problem.A) is None
-    if serial and problem.n <= AUTO_RAYLEIGH_N and _symmetric_pair(problem):
+    if serial and problem.n <= limits.AUTO_RAYLEIGH_N and _symmetric_pair(problem):
         order.append("rayleigh")
     order.append("active-set")
     if serial:

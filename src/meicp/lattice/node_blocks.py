@@ -7,7 +7,7 @@ the x-DOFs of its ends only), so the two DOFs of a node end up with different sp
 patterns.  MUMPS' AMF ordering then cannot merge them into one supervariable, and orders a
 graph twice the size with worse fill: the factorisation and the Schur complement of K̃_FF
 are two to three times slower than with explicit zeros completing every node block
-(docs/benchmarks-notes-house.md, lattice).  The PETSc pencil keeps the zeros of its
+(docs/benchmarks-notes.md, lattice).  The PETSc pencil keeps the zeros of its
 products and needs none of this; the SciPy pieces of the condensation do.
 
 :class:`NodeBlocks` pads a matrix to the pattern in which each nonzero couples whole
@@ -91,7 +91,7 @@ def _expand_contiguous(coupled: sp.csr_matrix, g: np.ndarray, runs: np.ndarray) 
     natural DOF numbering of a lattice: a node's DOFs are neighbours): each coupled pair of
     groups (G, c) becomes the column range of c in every row of G, already sorted.  Index
     arithmetic only: the product member·coupled·memberᵀ is slow at 10⁶ DOFs
-    (docs/benchmarks-notes-house.md, lattice).
+    (docs/benchmarks-notes.md, lattice).
     ``runs``: where each group's rows begin, and the end (m + 1 entries)."""
     n = g.size
     start, size = runs[:-1], np.diff(runs)
@@ -114,7 +114,7 @@ def _positions(P: sp.csr_matrix, H: sp.csr_matrix) -> np.ndarray | None:
     """Where each entry of H (canonical CSR) sits in P's entries, or None when H has an entry
     outside P's pattern: one elementwise product of P's entry numbers with H's pattern (a merge
     of sorted rows in C; a search of every entry is slow at 10⁶ DOFs,
-    docs/benchmarks-notes-house.md)."""
+    docs/benchmarks-notes.md)."""
     number = sp.csr_matrix((np.arange(1, P.nnz + 1, dtype=np.float64), P.indices, P.indptr), shape=P.shape)
     pattern = sp.csr_matrix((np.ones(H.nnz), H.indices, H.indptr), shape=H.shape)
     hit = number.multiply(pattern).tocsr()

@@ -18,7 +18,7 @@ from ..scene import Scene
 #: nonzeros per DOF row of K, at most: a node and its 8 neighbours, 2 DOFs each
 NONZEROS_PER_DOF = 18
 #: bytes per DOF, at least, of each use of a scene: below every measurement, so that a
-#: refusal is certain (the measurements: docs/benchmarks-notes-house.md, lattice)
+#: refusal is certain (the measurements: docs/benchmarks-notes.md, lattice)
 BYTES_PER_DOF = {"analysis": 3000, "lattice": 400, "geometry": 150}
 _USES = {"analysis": "an analysis", "lattice": "the lattice with K and M", "geometry": "the lattice geometry"}
 

@@ -54,7 +54,7 @@ def scaled(G: np.ndarray, d: np.ndarray | None) -> np.ndarray:
 def norm2_bound(X: np.ndarray) -> float:
     """An upper bound of ‖X‖₂ for a symmetric X: ‖X‖∞ (≥ ‖X‖₂ since ‖X‖₂² ≤ ‖X‖₁‖X‖∞).
     A rounding allowance only needs an upper bound, and the 2-norm's SVD costs several times
-    the certificate it allows for (docs/benchmarks-notes-house.md, lcp)."""
+    the certificate it allows for (docs/benchmarks-notes.md, lcp)."""
     return float(np.abs(X).sum(axis=1).max(initial=0.0))
 
 
@@ -132,7 +132,7 @@ def optimise_scaling(Gs: list[np.ndarray], d0: np.ndarray | None = None, iters: 
     logd = np.zeros(n) if d0 is None else np.log(d0)
     best_d, best = np.exp(logd), -np.inf
     # the ascent needs λ_min and its vector to a few digits, not to rounding: single precision
-    # above DENSE_LIMIT, where it is faster (docs/benchmarks-notes-house.md, lcp); every
+    # above DENSE_LIMIT, where it is faster (docs/benchmarks-notes.md, lcp); every
     # certificate is recomputed in double
     precision = np.float32 if n > DENSE_LIMIT else np.float64
     for _ in range(iters):

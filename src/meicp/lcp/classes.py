@@ -71,7 +71,7 @@ from .game import game_value
 
 #: largest exact_limit accepted: the exact tests visit 2^n − 1 principal submatrices, their
 #: time doubling per n; beyond this a call would run for far longer than anyone waits
-#: (docs/benchmarks-notes-house.md, lcp)
+#: (docs/benchmarks-notes.md, lcp)
 MAX_EXACT_LIMIT = 20
 
 #: largest dense_limit accepted: a dense copy of order 20000 is 3.2 GB
@@ -149,14 +149,14 @@ def classify(M, *, exact_limit: int = 12, tol: float = 1e-10, dense_limit: int =
     """Classify the square matrix ``M`` (dense or SciPy sparse) for LCP theory.
 
     exact_limit: run the exponential all-subset tests when ``n ≤ exact_limit`` (fast at the
-        default, docs/benchmarks-notes-house.md); above it only sufficient tests, undecided
+        default, docs/benchmarks-notes.md); above it only sufficient tests, undecided
         → None.
     tol: relative tolerance (to ``max|M|``) below which a quantity is treated as zero.
     dense_limit: sparse input is densified only up to this size; above it only
         sparse-friendly tests run (sign patterns, diagonal dominance, sparse LDLᵀ).
     det_limit: the full determinant/singular values of M are used up to this size.
     game_limit: the game value LP is solved up to this size (else ``game_value`` is None);
-        its sparse LP is slow well before n = 3000 (docs/benchmarks-notes-house.md).
+        its sparse LP is slow well before n = 3000 (docs/benchmarks-notes.md).
 
     Raises :class:`~meicp.core.errors.ProblemError` for non-square, empty, complex or
     non-finite M, for tol outside (0, 1e-2], for an ``exact_limit`` above

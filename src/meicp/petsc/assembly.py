@@ -81,7 +81,7 @@ class LatticeMatrices:
         """``(K, M)`` as SciPy CSR on every rank, for the consumers that read the lattice whole
         (the static equilibrium, the condensation): the matrices themselves when serial; when
         distributed, the serial assembly on every rank, as those consumers always had (cheaper
-        in time and memory than gathering the PETSc rows: docs/benchmarks-notes-data.md).  Not
+        in time and memory than gathering the PETSc rows: docs/benchmarks-notes.md).  Not
         kept: the caller drops them when done."""
         if not self.distributed:
             return self.K, self.M

@@ -65,7 +65,7 @@ def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_ran
     """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
     order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
     (a DOF pair of the n form, i.e. a lattice node, when n is even: fewer flops than blocks
-    of 2, docs/benchmarks-notes-layering.md) — blocks of 2 when n is odd, since MUMPS returns a wrong
+    of 2, docs/benchmarks-notes.md) — blocks of 2 when n is odd, since MUMPS returns a wrong
     factor, without an error, when the order is not a multiple of the block.  ``low_rank``:
     MUMPS block-low-rank factor and solves (ICNTL(35) = 2) at that dropping tolerance
     (CNTL(7)); every pair is re-checked on (A, B) anyway (docs/flutter.md §4)."""
@@ -148,7 +148,7 @@ class SlidingPencilOps:
         scale_all = scale if comm is None else np.concatenate(comm.allgather(scale))
         lo, hi = self.A.getOwnershipRange()
         # SciPy on the local rows: PETSc's A − Aᵀ (MatAYPX, different patterns) is slower
-        # (docs/benchmarks-notes-layering.md)
+        # (docs/benchmarks-notes.md)
         AT = self.A.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() works in place
         try:
             AT_local = local_csr(AT)

@@ -155,7 +155,7 @@ class ReducedPencilSolver:
         monitor, so the test reads this restart's Ritz values from the projected matrix itself
         (its eigenvalues are the monitor's, in the same restart); where the projected problem
         is stored compactly (a symmetric pencil) it uses the monitor's view of the previous
-        restart, one restart later (a restart's cost: docs/benchmarks-notes-layering.md)."""
+        restart, one restart later (a restart's cost: docs/benchmarks-notes.md)."""
         SLEPc = import_slepc()
         eps, seen = self.eps, {"hopeless": False, "restarts": 0}
         if eps.getST().getType() != SLEPc.ST.Type.SINVERT:  # another transform: no back-transform here

@@ -36,7 +36,7 @@ _MUMPS = {"pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 2}  # AMF o
 #: from the full-rank complement by 1.6e-16 relative, rounding.  1e-12 was faster still but
 #: 4e-15 off — relative to the largest entry, which is of the ill-conditioned block Z: the
 #: measured error of G rose from 1.2e-12 to 4.1e-12 and the critical friction's exact
-#: bracket at 10⁶ DOFs widened to 2e-5 (the timings: docs/benchmarks-notes-layering.md).  Only where the error is
+#: bracket at 10⁶ DOFs widened to 2e-5 (the timings: docs/benchmarks-notes.md).  Only where the error is
 #: measured (:func:`schur_complement`'s callers probe it); the factors whose inertia is a
 #: proof (:class:`MumpsFactor`) stay full rank
 SCHUR_LOW_RANK = 1e-14
@@ -144,7 +144,7 @@ def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
     """σ ↦ :func:`dense_schur` of the symmetric H₀ + σH₁ (one pattern, every rank holds both)
     onto ``rows``, with one MUMPS analysis for every σ (:class:`~meicp.petsc.mumps_c.SchurSeries`,
     DMUMPS through its C interface: PETSc's interface analyses again at each σ (a quarter of
-    each complement's time, docs/benchmarks-notes-layering.md), and its refactorisation returned a wrong Schur complement on 2 ranks); block
+    each complement's time, docs/benchmarks-notes.md), and its refactorisation returned a wrong Schur complement on 2 ranks); block
     low-rank (:data:`SCHUR_LOW_RANK`) unless ``-meicp_schur_mat_mumps_*`` say otherwise.  Where
     no DMUMPS of a known version loads (:func:`~meicp.petsc.mumps_c.load` checks the version),
     one PETSc factorisation per σ.  The result has

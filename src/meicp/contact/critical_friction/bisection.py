@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.errors import ConvergenceError
-from ...eicp.enumeration import MAX_J
+from ...core import limits
 from ...eicp.solve import solve_eicp
 from ..maps import grazing_cases, reduced_system
 from ..problem import pencil_of
@@ -29,7 +29,7 @@ def largest_sigma(lattice, lines, mu) -> float | None:
         if pen.A is None:
             continue  # every DOF held: no mode (as in analyze)
         A, B = pen.A.toarray(), pen.B.toarray()
-        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=MAX_J)  # internal: no budget
+        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=limits.EICP_MAX_J)  # internal: no budget
         if r.solutions:
             sigma = max(sol.lam for sol in r.solutions) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
             best = sigma if best is None else max(best, sigma)

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from ...core import limits
 from ...core.errors import ConvergenceError, ProblemError
 from ...eicp.problem import EiCPProblem, certify_pair
 from ..condensation import lift
@@ -26,9 +27,6 @@ log = logging.getLogger("meicp")
 MODE_TOL = 1e-9
 #: the search stops once a mode within this relative distance of the proved lower end is found
 SEARCH_CLOSE = 1e-3
-#: time allowed to the active-set starts of the search, and to extending the lower end by
-#: segments (each; what is found or proved by then stands, and the evidence says it)
-DENSE_SECONDS = 60.0
 #: condensed candidates lifted (one solve each) before the upper end is given up
 MAX_LIFTS = 20
 
@@ -66,7 +64,7 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
         low = lower_end(S, R, eS, eR, mu_max=mu_max)
         lap("lower")
         candidates = upper_candidates(S, R, near=max(low.mu, low.mu_pd), mu_max=mu_max, d=low.d,
-                                      good_enough=low.mu * (1 + SEARCH_CLOSE), seconds=DENSE_SECONDS)
+                                      good_enough=low.mu * (1 + SEARCH_CLOSE), seconds=limits.CRITICAL_DENSE_SECONDS)
         lap("search")
         return low, candidates
 
@@ -92,7 +90,7 @@ def _ends(comm, cond, red, A1, B1, mu_max: float):
         if mode_x is not None and upper - low.mu > EXACT_WIDTH * upper:
             low = lower_from_mode(low, S, R, eS, eR, upper, mode_x)
         if not np.isfinite(upper) or upper - low.mu > EXACT_WIDTH * upper:
-            low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max), seconds=DENSE_SECONDS)
+            low = extend_lower(low, S, R, eS, eR, mu_cap=min(upper, mu_max), seconds=limits.CRITICAL_DENSE_SECONDS)
         return low
 
     low = on_root(comm, lambda proved=low: refine(proved))

@@ -13,7 +13,7 @@ import scipy.sparse.linalg as spl
 from scipy.optimize import linprog
 
 from ...core.errors import ConvergenceError, ProblemError
-from ...eicp.enumeration import MAX_J
+from ...core import limits
 from ...eicp.problem import EiCPProblem, certify_pair
 from ...eicp.solve import solve_eicp
 from ...petsc.pencil import reduced_pencil
@@ -109,7 +109,7 @@ def smallest_mu(A1, B1, J, mu_max):
     # x_J ≥ 0 with xᵀ(−Ac)x = xᵀy = 0 only for x in its null space, excluded just above
     # max_j: the caller sized this enumeration (enumeration_is_small), not the by-name budget
     r = solve_eicp(-Bc, -Ac, J=Jc, method="enumerate", lam_min=1.0 / mu_max if mu_max > 0 else np.inf,
-                   tol=1e-9, max_j=MAX_J)
+                   tol=1e-9, max_j=limits.EICP_MAX_J)
     nus = [s for s in r.solutions if s.lam > 0 and 1.0 / s.lam <= mu_max]
     if not nus:
         return np.inf, bool(null.shape[1])

@@ -9,6 +9,7 @@ import logging
 
 import numpy as np
 
+from ...core import limits
 from ...core.errors import ConvergenceError, ProblemError
 from ...core.machine import available_memory
 from ...lattice.model import LatticeModel
@@ -26,11 +27,6 @@ from .result import EXACT_WIDTH, CriticalFriction
 
 log = logging.getLogger("meicp")
 
-#: critical_friction enumerates the 2^|J| supports of its EiCP condensed onto the |J|
-#: complementarity DOFs (order ≤ |J|) up to this many pairs: the enumeration's time grows
-#: geometrically with |J| (docs/benchmarks-notes-data.md); beyond it brackets μ_c
-#: (:mod:`.bracket`)
-CRITICAL_J = 20
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
@@ -43,7 +39,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
 
     scene: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction` also reads a file).
     Solved as an EiCP in μ, condensed onto its complementarity DOFs
-    (docs/critical-friction.md).  Up to ``CRITICAL_J`` (20) complementarity pairs per grazing
+    (docs/critical-friction.md).  Up to ``limits.CRITICAL_J`` (20) complementarity pairs per grazing
     case it is enumerated — all 2^|J| supports, exact — and the μ_c found is lifted back to
     the whole reduced lattice and certified there.  Beyond, a bracket: the lower end is a
     proof (diagonally scaled positive definiteness of the condensed S + μR on [0, lower]),
@@ -57,7 +53,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     and μ_c is undefined: ProblemError.  If it is not (e.g. a layer between two sliding
     contacts slipping in opposite directions), the enumeration meets singular pencils on
     some supports, so the bisection check is then required (ProblemError if it is too large
-    for the default ``bisection=None``; a warning if ``bisection=False``); beyond CRITICAL_J
+    for the default ``bisection=None``; a warning if ``bisection=False``); beyond limits.CRITICAL_J
     such a lattice is refused (the bracket needs the lattice held once the contacts are).
 
     ``bisection``: cross-check of an enumerated μ_c on the σ-problem with the mass (a σ ≥ 0
@@ -79,7 +75,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
         if red.J.size == 0:
             continue
         A1, B1 = friction_pencil(K, red)
-        if red.J.size <= CRITICAL_J:
+        if red.J.size <= limits.CRITICAL_J:
             mu, sing = smallest_mu(A1, B1, red.J, mu_max)
             singular = singular or sing
             ends.append((mu, mu))

@@ -5,9 +5,9 @@ enumeration of small problems (:mod:`.enumeration`), the condensed proof
 (:mod:`.verdict`)."""
 
 from .driver import PROCEDURES, Procedures, divergence_of, window_verdict
-from .enumeration import ENUMERATE_FLOPS, ENUMERATE_J, ENUMERATE_N, check_enumeration_size, enumeration_is_small
+from .enumeration import check_enumeration_size, enumeration_is_small
 from .verdict import DivergenceProof, DivergenceVerdict, all_held
 
-__all__ = ["ENUMERATE_FLOPS", "ENUMERATE_J", "ENUMERATE_N", "PROCEDURES", "DivergenceProof", "DivergenceVerdict",
+__all__ = ["PROCEDURES", "DivergenceProof", "DivergenceVerdict",
            "Procedures", "all_held", "check_enumeration_size", "divergence_of", "enumeration_is_small",
            "window_verdict"]

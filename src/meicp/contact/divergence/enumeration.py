@@ -1,53 +1,45 @@
 """The divergence verdict of a small reduced problem, by enumerating every support; and of
 a method asked for by name other than the window procedure.
 
-An enumeration asked for by name is refused past ``ENUMERATE_J`` pairs unless ``max_j``
-raises the limit, or past ``ENUMERATE_MAX_FLOPS`` of work (2^|J|·r³, about an hour) unless
+An enumeration asked for by name is refused past ``limits.ENUMERATE_J`` pairs unless ``max_j``
+raises the limit, or past ``limits.ENUMERATE_MAX_FLOPS`` of work (2^|J|·r³, about an hour) unless
 ``max_j`` is given (:func:`check_enumeration_size`).
 """
 
 from __future__ import annotations
 
+from ...core import limits
 from ...core.errors import ProblemError
 from ...core.validation import as_int
 from ...eicp.budget import check_enumeration_work
-from ...eicp.problem import MAX_ENUMERATED
 from ...eicp.solve import solve_eicp
 from .modes import certified_modes
 from .verdict import DivergenceProof, DivergenceVerdict
 
-#: reduced problems are enumerated when 2^|J| dense eigen-solves of size r cost at most
-#: about this many flops (2^|J|·r³), with r ≤ ENUMERATE_N and |J| ≤ ENUMERATE_J.  ENUMERATE_J
-#: also bounds ``method="enumerate"`` asked for by name (unless ``max_j`` raises it): hours
-#: grow to days with the lattice (docs/benchmarks-notes.md, "enumeration by name"); the work
-#: of one by name is bounded too (meicp.eicp.budget.ENUMERATE_MAX_FLOPS)
-ENUMERATE_FLOPS = 2e9
-ENUMERATE_N = 600
-ENUMERATE_J = 16
 
 
 def enumeration_is_small(r: int, n_j: int) -> bool:
     """Whether 2^|J| dense eigen-solves of size r are within the enumeration budget
     (``analyze``'s ``auto`` choice, and ``critical_friction``'s bisection check)."""
-    return r <= ENUMERATE_N and n_j <= ENUMERATE_J and 2.0 ** n_j * r ** 3 <= ENUMERATE_FLOPS
+    return r <= limits.ENUMERATE_N and n_j <= limits.ENUMERATE_J and 2.0 ** n_j * r ** 3 <= limits.ENUMERATE_FLOPS
 
 
 def check_enumeration_size(n_j: int, r: int, options: dict) -> None:
     """ProblemError when an enumeration of 2^n_j supports of order up to r is past the
-    limit: ENUMERATE_J pairs, or the ``max_j`` keyword's (at most MAX_ENUMERATED) when the
+    limit: limits.ENUMERATE_J pairs, or the ``max_j`` keyword's (at most limits.MAX_ENUMERATED) when the
     caller raised it; and, unless ``max_j`` was given (the caller then accepts the cost),
-    ENUMERATE_MAX_FLOPS of work.  The error names the limit and the methods that decide
+    limits.ENUMERATE_MAX_FLOPS of work.  The error names the limit and the methods that decide
     past it."""
     given = options.get("max_j")
-    limit = ENUMERATE_J if given is None else as_int(given, "max_j", minimum=0, maximum=MAX_ENUMERATED)
+    limit = limits.ENUMERATE_J if given is None else as_int(given, "max_j", minimum=0, maximum=limits.MAX_ENUMERATED)
     if n_j <= limit:
         if given is None:  # the pair count is not the work (docs/benchmarks-notes.md, "enumeration by name")
             check_enumeration_work(n_j, r, f"analyze(..., max_j={max(n_j, 1)}) from Python")
         return
     name = (f"max_j = {limit}" if given is not None
-            else f"the limit of {limit} pairs ({2 ** limit:,} supports, meicp.contact.divergence.ENUMERATE_J)")
-    raise_it = (f", or raise the limit with analyze(..., max_j={n_j}) from Python" if n_j <= MAX_ENUMERATED
-                else f"; max_j cannot exceed {MAX_ENUMERATED}")
+            else f"the limit of {limit} pairs ({2 ** limit:,} supports, meicp.core.limits.ENUMERATE_J)")
+    raise_it = (f", or raise the limit with analyze(..., max_j={n_j}) from Python" if n_j <= limits.MAX_ENUMERATED
+                else f"; max_j cannot exceed {limits.MAX_ENUMERATED}")
     raise ProblemError(f"method 'enumerate' visits all 2^|J| supports: |J| = {n_j} complementarity pairs is "
                        f"{2 ** n_j:,} supports, past {name}; each pair more doubles the time; use method='auto' "
                        f"or method='active-set', which decide past it with proofs that scale{raise_it}")

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from ...core import limits
 from ...core.errors import ProblemError
 from ...core.results import SOLVED
 from ...lcp.classes import classify
@@ -19,13 +20,9 @@ from .data import StaticData, singular_message
 from .result import StaticResult
 from .states import settle
 
-#: most contacts (all sets together) for the condensed dense formulation
-MAX_CONTACTS = 2000
 #: K_rr counts as singular when the Rayleigh quotient of its inverse-iteration vector is
 #: below this times max|K_rr| (a genuinely held lattice of 10⁶ DOFs is around 1e-6)
 SINGULAR_RTOL = 1e-12
-#: largest LCP for which method="auto" falls back to dense Lemke when its own choice failed
-LEMKE_LIMIT = 4 * MAX_CONTACTS
 #: entries of q below this times max|q| are rounding noise and set to 0
 Q_NOISE = 1e-12
 #: right-hand sides per block when forming G (bounded by memory, see _condense)
@@ -103,7 +100,7 @@ def solve_condensed(data: StaticData, *, method: str, lcp_tol: float, classify_l
         lcp = solve_lcp(Mx, q, method=method, tol=lcp_tol, **lcp_options)
         tried = {a[0] for a in lcp.attempts}
         if (method == "auto" and not lcp.success and lcp.status != "infeasible"
-                and "lemke" not in tried and n_lcp <= LEMKE_LIMIT):
+                and "lemke" not in tried and n_lcp <= limits.STATIC_LEMKE_LIMIT):
             # auto skips dense pivoting above its DENSE_LIMIT; the friction LCP (zero λ
             # diagonal) often defeats Newton, so pivot anyway: slow (O(n³)) but robust
             first = lcp

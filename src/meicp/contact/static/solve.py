@@ -5,19 +5,18 @@ from __future__ import annotations
 
 import time
 
+from ...core import limits
 from ...core.errors import ProblemError
 from ...lattice.model import LatticeModel
 from ...lcp.problem import DEFAULT_TOL as LCP_TOL
 from ...scene import Scene
-from .condensed import MAX_CONTACTS, solve_condensed
+from .condensed import solve_condensed
 from .data import static_data
 from .mixed import solve_mixed
 from .result import StaticResult
 
 #: default relative tolerance of the state classification (docs/static-equilibrium.md)
 TOL = 1e-9
-#: formulation="auto" uses the condensed (dense) path up to this many contacts, else mixed
-AUTO_CONDENSED_LIMIT = 200
 FORMULATIONS = ("auto", "condensed", "mixed")
 
 
@@ -40,7 +39,7 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     formulation: ``"condensed"`` (dense compliance, Lemke; classifies the LCP matrix),
     ``"mixed"`` (sparse, displacements kept, PETSc SNES VI + certified polish; no matrix
     classes; options ``petsc_options`` under ``-meicp_static_``) or ``"auto"`` (condensed up
-    to :data:`AUTO_CONDENSED_LIMIT` contacts, else mixed).  comm: with several ranks the
+    to :data:`limits.STATIC_AUTO_CONDENSED_LIMIT` contacts, else mixed).  comm: with several ranks the
     mixed formulation's PETSc solves are distributed over it (collective then: every rank
     calls with the same scene); the condensed formulation ignores it.
 
@@ -49,7 +48,7 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
 
     Deterministic: under MPI every rank may call it with the same scene and gets the same
     answer.  Raises :class:`ProblemError` before any solve for a scene with no contact set
-    ("a load with no contact"), a bad load, more than :data:`MAX_CONTACTS` contacts for the
+    ("a load with no contact"), a bad load, more than :data:`limits.STATIC_MAX_CONTACTS` contacts for the
     condensed formulation, or a singular stiffness.  A failed LCP is not an exception:
     ``status`` comes from the LCP and no states are reported.  The formulations, tolerances
     and what each error means: docs/static-equilibrium.md.
@@ -74,10 +73,10 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     if formulation not in FORMULATIONS:
         raise ProblemError(f"formulation must be 'auto', 'condensed' or 'mixed', got {formulation!r}")
     if formulation == "auto":
-        formulation = "condensed" if nc_total <= AUTO_CONDENSED_LIMIT else "mixed"
-    if formulation == "condensed" and nc_total > MAX_CONTACTS:
+        formulation = "condensed" if nc_total <= limits.STATIC_AUTO_CONDENSED_LIMIT else "mixed"
+    if formulation == "condensed" and nc_total > limits.STATIC_MAX_CONTACTS:
         raise ProblemError(f"static equilibrium: {nc_total} contacts exceed the condensed dense "
-                           f"formulation's limit of {MAX_CONTACTS}; use formulation=\"mixed\" (the "
+                           f"formulation's limit of {limits.STATIC_MAX_CONTACTS}; use formulation=\"mixed\" (the "
                            "sparse mixed formulation)")
     model = model if model is not None else LatticeModel(scene)
     if not isinstance(model, LatticeModel) or (model.scene is not scene and model.scene != scene):
