@@ -86,7 +86,7 @@ class Condenser:
         self._series = None  # the Schur complements of 𝓗(σ), one MUMPS analysis for every σ
         self._factor0: MumpsFactor | None = None
         self._solve0 = None
-        #: where the windows are split (:func:`~.windows.cover`): half SLEPc's estimate of
+        #: where the windows are split (:func:`~.divergence.cover.cover`): half SLEPc's estimate of
         #: λ_min(K̃_FF, M̃_FF), or the certified ``tau`` when that is larger (on the Schur
         #: series' instance, where half the estimate is certified, the two are equal)
         self.tau_scale: float | None = None

@@ -1,5 +1,5 @@
 """The SLEPc active-set search for a divergence mode from the top of the σ-window
-(:mod:`meicp.eicp.active_set`).
+(:mod:`meicp.petsc.eicp_active_set`).
 
 Its shift sits at an estimate of λ_max(sym A, sym B), which bounds the real part of every
 eigenvalue of every support's pencil, so the first pair it takes is the rightmost eigenvalue

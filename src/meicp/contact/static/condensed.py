@@ -90,7 +90,7 @@ def solve_condensed(data: StaticData, *, method: str, lcp_tol: float, classify_l
     # Lemke's degenerate pivots fail on a secondary ray: entries this small are zero
     q[np.abs(q) <= Q_NOISE * float(np.max(np.abs(q), initial=0.0))] = 0.0
     layout = dict(sl, scale=sG, normal=active, friction_set=fric, contacts=list(cts.labels),
-                  rigid_modes=k, sets=[s[:3] for s in cts.sets])
+                  rigid_modes=k, sets=[(s.name, s.start, s.end) for s in cts.spans])
 
     t0 = time.perf_counter()
     if n_lcp == 0:

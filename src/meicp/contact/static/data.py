@@ -85,13 +85,24 @@ def body_force(model, load) -> np.ndarray:
 
 # --------------------------------------------------------------------------- contacts
 
+@dataclass(frozen=True)
+class LineSpan:
+    """Where one contact line's contacts sit in the static problem's contact order:
+    ``start`` to ``end`` (exclusive), all with friction ``friction``."""
+
+    name: str
+    start: int
+    end: int
+    friction: float
+
+
 @dataclass
 class Contacts:
     """Every contact of the scene, the base's first, then each frictional interface's: the
     scene's contact lines (:func:`~meicp.contact.lines.contact_lines`) as linear functionals."""
 
     labels: list          # (line name, column) per contact
-    sets: list            # (line name, first contact, end, μ)
+    spans: list           # LineSpan per contact line, in order
     mu: np.ndarray
     A_n: sp.csr_matrix    # normal functional per contact (nc × ndof)
     A_t: sp.csr_matrix
@@ -100,7 +111,7 @@ class Contacts:
 def contact_functionals(lines, model) -> Contacts:
     """The normal and tangential functionals of every contact of ``lines``: ``u_n`` (``u_t``)
     of the contact node, or of the upper minus the lower node on a frictional interface."""
-    rows_n, cols_n, vals, labels, sets, mu = [], [], [], [], [], []
+    rows_n, cols_n, vals, labels, spans, mu = [], [], [], [], [], []
     cols_t = []
     for line in lines:
         c0 = len(labels)
@@ -116,13 +127,13 @@ def contact_functionals(lines, model) -> Contacts:
                 rows_n.append([c, c]); cols_n.append([2 * upper[i] + 1, 2 * lower[i] + 1])
                 cols_t.append([2 * upper[i], 2 * lower[i]])
                 vals.append([1.0, -1.0])
-        sets.append((line.name, c0, len(labels), float(line.friction)))
+        spans.append(LineSpan(line.name, c0, len(labels), float(line.friction)))
     nc = len(labels)
     r = np.concatenate(rows_n) if nc else np.zeros(0, int)
     v = np.concatenate(vals) if nc else np.zeros(0)
     A_n = sp.csr_matrix((v, (r, np.concatenate(cols_n) if nc else r)), shape=(nc, model.n_dofs))
     A_t = sp.csr_matrix((v, (r, np.concatenate(cols_t) if nc else r)), shape=(nc, model.n_dofs))
-    return Contacts(labels, sets, np.asarray(mu, dtype=float), A_n, A_t)
+    return Contacts(labels, spans, np.asarray(mu, dtype=float), A_n, A_t)
 
 
 # --------------------------------------------------------------------------- rigid modes
@@ -251,10 +262,10 @@ class StaticData:
 
     def friction(self) -> dict:
         """μ per contact set."""
-        return {s[0]: s[3] for s in self.contacts.sets}
+        return {s.name: s.friction for s in self.contacts.spans}
 
     def describe_friction(self) -> str:
-        return ", ".join(f"{name}: μ = {mu:g}" for name, _, _, mu in self.contacts.sets)
+        return ", ".join(f"{s.name}: μ = {s.friction:g}" for s in self.contacts.spans)
 
 
 def static_data(scene: Scene, model: LatticeModel, *, tol: float, allow_floating: bool,

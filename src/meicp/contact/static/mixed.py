@@ -257,7 +257,7 @@ def solve_mixed(static: StaticData, *, comm, petsc_options: dict | None, timings
     timings["lcp"] = time.perf_counter() - t0
     n_lcp = system.nN + 3 * system.nF
     lay = {"formulation": "mixed", "unknowns": system.n, "normal": active, "friction_set": fric,
-           "contacts": list(cts.labels), "rigid_modes": k, "sets": [s[:3] for s in cts.sets],
+           "contacts": list(cts.labels), "rigid_modes": k, "sets": [(s.name, s.start, s.end) for s in cts.spans],
            "scale": 1.0 / system.sK, "attempts": info.get("attempts", [])}
     reason = "; ".join(f"{a['snes_type']}: {a['reason']} after {a['iterations']} iterations"
                        for a in info.get("attempts", []))

@@ -73,7 +73,8 @@ def _store_contacts(result, cts, states, per_contact, u, tol, F, D, certificate_
                          "cone": f"|r_t| >= mu*r_n*(1 - {tol:g}) - {tol * F:.3g}",
                          "lcp_certificate": certificate_tol}
     result.u = u
-    for name, a, b, _mu in cts.sets:
+    for span in cts.spans:
+        name, a, b = span.name, span.start, span.end
         if name == BASE:
             result.states = states[a:b]
             result.r_n, result.r_t, result.gap, result.slip = r_n[a:b], r_t[a:b], gap[a:b], slip[a:b]
