@@ -236,3 +236,12 @@ def slepc_eigensolve(A, B, nev: int, *, hermitian: bool = False, extra: dict | N
     finally:
         eps.destroy()
     return vals, its
+
+
+def save_figure(fig, path, *, dpi: int = 110) -> None:
+    """Lay out, write and close a chart."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)

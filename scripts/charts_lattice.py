@@ -13,7 +13,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from bench_common import read_rows  # noqa: E402
+from bench_common import read_rows, save_figure  # noqa: E402
 
 
 def chart_assembly(path):
@@ -152,9 +152,7 @@ def chart_scaling(path):
                  "vs active-set; static contact LCP, meicp vs Siconos; slopes over all points (active-set: from 10^5)")
     bx.grid(True, which="both", alpha=0.3)
     bx.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
-    fig.tight_layout()
-    fig.savefig(f"{out}_time.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_time.png", dpi=110)
     # 2. memory
     fig, ax = plt.subplots(figsize=(10, 6.5))
     for stage, method, label in pipeline:
@@ -167,9 +165,7 @@ def chart_scaling(path):
                  "solid 1 rank, dashed 2 ranks; slopes from 10^5 DOFs up")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(f"{out}_memory.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_memory.png", dpi=110)
     # 3. speedup and efficiency 1 -> 2 ranks
     fig, ax = plt.subplots(figsize=(10, 6.5))
     pairs = [("assemble", "meicp-scipy", "meicp-petsc", "assembly (SciPy 1 rank → PETSc 2 ranks)"),
@@ -206,9 +202,7 @@ def chart_scaling(path):
     sec.set_ylabel("parallel efficiency")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3)
-    fig.tight_layout()
-    fig.savefig(f"{out}_speedup.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_speedup.png", dpi=110)
     print(f"wrote {out}_time.png, {out}_memory.png, {out}_speedup.png")
     _chart_scaling_xy(rows, out)
 
@@ -252,9 +246,7 @@ def _chart_scaling_xy(rows, out):
                  "(later solves restart from the last eigenvector, reuse the symbolic LU)")
     bx.grid(True, which="both", alpha=0.3)
     bx.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    fig.savefig(f"{out}_activeset.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_activeset.png", dpi=110)
     print(f"wrote {out}_activeset.png")
 
 

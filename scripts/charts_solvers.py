@@ -12,7 +12,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from bench_common import read_rows  # noqa: E402
+from bench_common import read_rows, save_figure  # noqa: E402
 
 
 def chart_lcp(path):
@@ -38,9 +38,7 @@ def chart_lcp(path):
                       "lattice": "elastic lattice K on vertical DOFs, sparse SPD"}[family])
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(f"{out}_time.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_time.png", dpi=110)
     # 2. outcome per problem and method on the Siconos set
     sic = [r for r in rows if r["family"] == "siconos"]
     problems = sorted({r["problem"] for r in sic})
@@ -56,9 +54,7 @@ def chart_lcp(path):
     ax.set_yticks(range(len(problems)), problems, fontsize=8)
     ax.set_title("Siconos LCP set: green solved (certified), blue proved unsolvable, red failed, grey not run",
                  fontsize=8)
-    fig.tight_layout()
-    fig.savefig(f"{out}_siconos.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}_siconos.png", dpi=110)
     print(f"wrote {out}_time.png, {out}_siconos.png")
 
 
@@ -111,9 +107,7 @@ def chart_eicp(path):
     ax.set_ylabel("relative λ error vs dense reference")
     ax.set_title("time against accuracy, random mixed symmetric problems", fontsize=9)
     ax.legend()
-    fig.tight_layout()
-    fig.savefig(f"{out}.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}.png", dpi=110)
     print(f"wrote {out}.png")
 
 

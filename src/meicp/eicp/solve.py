@@ -27,6 +27,7 @@ from ..core import limits
 from ..core.comm import mpi_comm
 from ..core.errors import PetscOptionError, ProblemError, SolverNotFound
 from ..core.matrix import is_symmetric, matrix_comm
+from ..core.registry import SolverRegistry
 from .budget import check_enumeration_work
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
@@ -40,23 +41,14 @@ log = logging.getLogger("meicp")
 
 
 #: method name → ``solver(problem, **options) -> EiCPResult``
-SOLVERS = {
-    "enumerate": enumerate_eicp,
-    "rayleigh": rayleigh,
-}
-
-
-def register(name: str):
-    """Decorator: the function becomes method ``name`` of :func:`solve_eicp` (how
-    ``meicp.petsc`` adds the methods that need PETSc)."""
-    def add(solver):
-        SOLVERS[name] = solver
-        return solver
-    return add
-
-
-def available_methods() -> list[str]:
-    return sorted(SOLVERS) + ["auto"]
+SOLVERS = SolverRegistry(
+    enumerate=enumerate_eicp,
+    rayleigh=rayleigh,
+)
+#: ``@register(name)`` makes a function method ``name`` of :func:`solve_eicp` (how ``meicp.petsc``
+#: adds the methods that need PETSc)
+register = SOLVERS.register
+available_methods = SOLVERS.available
 
 
 def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = False, lam_min=None,

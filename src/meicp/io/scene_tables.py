@@ -81,12 +81,7 @@ class SceneParser(ValueChecks):
         layers, names = [], set()
         for k, entry in enumerate(entries):
             t = Table(self, entry, f"layers[{k}]", KEYS["layers"])
-            name = t.string("name")
-            if not name:
-                self.fail(t.key("name"), "must not be empty")
-            if name in names:
-                self.fail(t.key("name"), f"repeats the layer name {name!r}")
-            names.add(name)
+            name = self.new_name(t, names, "the layer name")
             layer = Layer(name=name, rows=t.integer("rows", minimum=1),
                           stiffness=t.number("stiffness", positive=True),
                           density=t.number("density", positive=True))
@@ -94,18 +89,23 @@ class SceneParser(ValueChecks):
             layers.append(layer)
         return layers
 
+    def new_name(self, t, names: set, what: str, why: str = "") -> str:
+        """Table ``t``'s non-empty ``name``, not among ``names`` (added to them)."""
+        name = t.string("name")
+        if not name:
+            self.fail(t.key("name"), "must not be empty")
+        if name in names:
+            self.fail(t.key("name"), f"repeats {what} {name!r}{why}")
+        names.add(name)
+        return name
+
     def embedded(self, data, lattice, layers) -> list[Embedded]:
         entries = self.array_of_tables(data, "embedded")
         by_name = {layer.name: layer for layer in layers}
         out, names, boxes = [], set(by_name), []
         for k, entry in enumerate(entries):
             t = Table(self, entry, f"embedded[{k}]", KEYS["embedded"])
-            name = t.string("name")
-            if not name:
-                self.fail(t.key("name"), "must not be empty")
-            if name in names:
-                self.fail(t.key("name"), f"repeats the name {name!r} (layer and band names are unique)")
-            names.add(name)
+            name = self.new_name(t, names, "the name", " (layer and band names are unique)")
             host = t.string("host")
             if host not in by_name:
                 self.fail(t.key("host"), f"must name a layer ({', '.join(map(repr, by_name))}), got {host!r}")

@@ -21,6 +21,7 @@ import time
 
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.matrix import is_symmetric
+from ..core.registry import SolverRegistry
 from ..core.validation import as_int, as_real, check_tol
 from .enumeration import enumerate_lcp
 from .lemke import lemke
@@ -33,24 +34,15 @@ DENSE_LIMIT = 3000
 SMALL = 500
 
 #: method name → ``solver(problem, *, tol, comm, **options) -> LCPResult``
-SOLVERS = {
-    "lemke": lemke,
-    "enumerate": enumerate_lcp,
-    "pgs": pgs,
-}
-
-
-def register(name: str):
-    """Decorator: the function becomes method ``name`` of :func:`solve_lcp` (how
-    ``meicp.petsc`` adds the methods that need PETSc)."""
-    def add(solver):
-        SOLVERS[name] = solver
-        return solver
-    return add
-
-
-def available_methods() -> list[str]:
-    return sorted(SOLVERS) + ["auto"]
+SOLVERS = SolverRegistry(
+    lemke=lemke,
+    enumerate=enumerate_lcp,
+    pgs=pgs,
+)
+#: ``@register(name)`` makes a function method ``name`` of :func:`solve_lcp` (how ``meicp.petsc``
+#: adds the methods that need PETSc)
+register = SOLVERS.register
+available_methods = SOLVERS.available
 
 
 def auto_order(problem: LCPProblem) -> list[str]:
