@@ -238,10 +238,11 @@ def slepc_eigensolve(A, B, nev: int, *, hermitian: bool = False, extra: dict | N
     return vals, its
 
 
-def save_figure(fig, path, *, dpi: int = 110) -> None:
-    """Lay out, write and close a chart."""
+def save_figure(fig, path, *, dpi: int = 110, rect=None) -> None:
+    """Lay out (within ``rect`` when a title or legend sits outside the axes), write and close
+    a chart."""
     import matplotlib.pyplot as plt
 
-    fig.tight_layout()
+    fig.tight_layout(**({} if rect is None else {"rect": rect}))
     fig.savefig(path, dpi=dpi)
     plt.close(fig)

@@ -346,9 +346,7 @@ def chart_resolution(path):
         ax.legend(fontsize=7.5, loc="upper left")
         fig.suptitle("One physical scene (4×4 two-layer block, free sides, every base node sliding, μ = 3) "
                      "refined: a = 4/n, nx = n + 1", fontsize=11)
-        fig.tight_layout(rect=(0, 0, 1, 0.95))
-        fig.savefig(f"{out}.png", dpi=110)
-        plt.close(fig)
+        save_figure(fig, f"{out}.png", dpi=110, rect=(0, 0, 1, 0.95))
         print(f"wrote {out}.png")
     feats = [r for r in rows if r["part"] == "features"]
     if feats:
@@ -395,9 +393,7 @@ def chart_resolution(path):
         axes[1].set_ylim(lo, hi * 8)
         fig.suptitle("Cost of each scene feature (fresh process per run, repeats interleaved; red: not 'solved')",
                      fontsize=11)
-        fig.tight_layout(rect=(0, 0, 1, 0.95))
-        fig.savefig(f"{out}_features.png", dpi=110)
-        plt.close(fig)
+        save_figure(fig, f"{out}_features.png", dpi=110, rect=(0, 0, 1, 0.95))
         print(f"wrote {out}_features.png")
 
 

@@ -330,7 +330,5 @@ def chart_failure(path):
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8.5, frameon=False)
     fig.suptitle("Failure map: each method's outcome against an independent brute-force / analytic reference",
                  fontsize=12)
-    fig.tight_layout(rect=(0, 0.06, 1, 0.97))
-    fig.savefig(f"{out}.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, f"{out}.png", dpi=110, rect=(0, 0.06, 1, 0.97))
     print(f"wrote {out}.png")
