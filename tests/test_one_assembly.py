@@ -9,10 +9,9 @@ starts every assembly, serial or PETSc."""
 import pytest
 
 import meicp
-import meicp.contact.critical_friction.solve as cf
 import meicp.lattice.assembly as lattice_assembly
-from meicp.core import limits
 import meicp.petsc.assembly as petsc_assembly
+from meicp.core import limits
 from meicp.examples import two_layer_scene
 from meicp.io.scene import loads_scene
 
