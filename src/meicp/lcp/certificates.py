@@ -17,10 +17,6 @@ computed λ_min must exceed the dense eigen-solve's rounding plus ``max(d)·ε``
 With μ as the parameter, ``G_μ = S + μR``: one D with ``sym(DS) ≻ 0`` and
 ``sym(D(S + μ₁R)) ≻ 0`` certifies every μ ∈ [0, μ₁] (the positive definite cone is convex),
 and the largest such μ₁ for a given D is ``μ̄(D) = 1/λ_max(−sym(DR), sym(DS))``.
-
-H-matrix certificates: G with a positive diagonal whose comparison matrix 𝓜(G) (|g_ii| on the
-diagonal, −|g_ij| off it) satisfies 𝓜(G)x > 0 for some x > 0 is an H-matrix, hence a
-P-matrix, hence in R₀; an entrywise error δ of G moves (𝓜(G)x)_i by at most δ‖x‖₁.
 """
 from __future__ import annotations
 
@@ -312,34 +308,3 @@ def chain_mu_lower_bound(S, R, error_S: float, error_R: float, mu_start: float, 
         else:
             step = 1.0 + 0.5 * (step - 1.0)
     return mu_k, segs
-
-
-def comparison(G: np.ndarray) -> np.ndarray:
-    """The comparison matrix 𝓜(G): |g_ii| on the diagonal, −|g_ij| off it."""
-    C = -np.abs(G)
-    np.fill_diagonal(C, np.abs(np.diag(G)))
-    return C
-
-
-def h_margin(G: np.ndarray, x: np.ndarray, error: float) -> float:
-    """``min_i (𝓜(G)x)_i − error·‖x‖₁ − rounding`` for x normalised to max 1 (error: an
-    entrywise bound of |Ĝ − G|); > 0 certifies G an H-matrix with a positive diagonal."""
-    if np.any(np.diag(G) <= 0) or np.any(x <= 0):
-        return -np.inf
-    x = x / x.max()
-    C = comparison(G)
-    rounding = 4 * G.shape[0] * EPS * (np.abs(C) @ x)
-    return float(np.min(C @ x - rounding) - error * x.sum())
-
-
-def h_certificate(G: np.ndarray, error: float) -> tuple[float, np.ndarray | None]:
-    """``(margin, x)`` with x = 𝓜(G)⁻¹·1 (positive iff G is an H-matrix); (−inf, None) if not."""
-    if np.any(np.diag(G) <= 0):
-        return -np.inf, None
-    try:
-        x = np.linalg.solve(comparison(G), np.ones(G.shape[0]))
-    except np.linalg.LinAlgError:
-        return -np.inf, None
-    if np.any(x <= 0):
-        return -np.inf, None
-    return h_margin(G, x, error), x / x.max()
