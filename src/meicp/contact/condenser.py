@@ -25,8 +25,8 @@ Two ways (``method``):
   this fallback uses them).
 
 ``"auto"``: solves while |F|·|J| ≤ ``limits.SOLVES_LIMIT`` and the mass is diagonal, else Schur.
-Collective on ``comm`` (every rank holds the SciPy pieces, built from the whole SciPy K and M
-of the analysis' one assembly, :meth:`Condenser.of`; MUMPS factors them distributed).  The
+Collective on ``comm`` (every rank holds the SciPy pieces, built from the lattice's K and M
+read whole, :meth:`Condenser.of`; MUMPS factors them distributed).  The
 certificates themselves are in :mod:`.condenser_certificates`.
 """
 from __future__ import annotations
@@ -94,8 +94,10 @@ class Condenser:
     @classmethod
     def of(cls, pencil, comm=None, **options) -> "Condenser":
         """The condenser of a :class:`~meicp.contact.problem.Pencil`'s maps, from its lattice's
-        K and M (gathered whole on every rank when distributed, and dropped once the pieces are
-        split off them).  ``comm``: the communicator MUMPS factors on (default the pencil's)."""
+        K and M whole on every rank (:meth:`~meicp.petsc.assembly.LatticeMatrices.whole`: the
+        pencil's own when serial, a serial copy on each rank when distributed), dropped once the
+        pieces are split off them.  ``comm``: the communicator MUMPS factors on (default the
+        pencil's)."""
         K, M = pencil.lattice.whole()
         return cls(pencil.comm if comm is None else comm, pencil.maps, K, M, **options)
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.errors import ConvergenceError
 from ...core import limits
+from ...core.errors import ConvergenceError
 from ...eicp.solve import solve_eicp
 from ..maps import grazing_cases, reduced_system
 from ..problem import pencil_of

@@ -10,12 +10,12 @@ import logging
 import numpy as np
 
 from ...core import limits
+from ...core.comm import mpi_comm
 from ...core.errors import ConvergenceError, ProblemError
 from ...core.machine import available_memory
 from ...lattice.model import LatticeModel
 from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
-from ...core.comm import mpi_comm
 from ...scene import Scene
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
@@ -26,7 +26,6 @@ from .enumerated import condense_in_mu, friction_pencil, singular_message, small
 from .result import EXACT_WIDTH, CriticalFriction
 
 log = logging.getLogger("meicp")
-
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
