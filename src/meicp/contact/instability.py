@@ -92,13 +92,9 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
         return modal_analysis(scene, model, comm, nev=solver_options.get("nev"),
                               options=solver_options.get("options"))
     result = InstabilityResult()
-    # -- lattice: assembled once, read by every step below ----------------------------------
-    t0 = time.perf_counter()
-    with stage("assemble"):
-        lattice = LatticeMatrices(model, comm)  # PETSc (row bands) when distributed, else SciPy
-    timings["assemble"] = time.perf_counter() - t0
-    log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
-    with lattice:
+    # the lattice, assembled once and read by every step below; PETSc (row bands) when
+    # distributed, else SciPy (serial: the static equilibrium assembles it, reading it first)
+    with LatticeMatrices(model, comm) as lattice:
         # -- states -----------------------------------------------------------------------
         t0 = time.perf_counter()
         with stage("static"):
@@ -110,6 +106,13 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 result.status, result.message = static.status, f"static equilibrium failed: {static.message}"
                 result.timings = timings
                 return result
+        # -- lattice: after the static equilibrium, which on several ranks reads its own
+        # serial copy (the distributed K, M would only add to its peak) ---------------------
+        t0 = time.perf_counter()
+        with stage("assemble"):
+            lattice.assemble()
+        timings["assemble"] = time.perf_counter() - t0
+        log.info("assembled K, M: %d DOFs (%.2f s)", model.n_dofs, timings["assemble"])
         result.states = state_names(next((line.states for line in lines if line.name == BASE), ()))
         result.interface_states = {line.name: state_names(line.states) for line in lines if line.name != BASE}
         # -- one MEiCP per grazing case ---------------------------------------------------

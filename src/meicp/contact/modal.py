@@ -70,7 +70,7 @@ def modal_analysis(scene: Scene, model: LatticeModel, comm=None, *, nev: int | N
     tol = tol or scene.solver.tol or 1e-10
     t0 = time.perf_counter()
     with stage("assemble"):
-        lattice = LatticeMatrices(model, comm)
+        lattice = LatticeMatrices(model, comm).assemble()
     timings["assemble"] = time.perf_counter() - t0
     with lattice:
         t0 = time.perf_counter()

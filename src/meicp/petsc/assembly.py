@@ -53,25 +53,46 @@ class LatticeMatrices:
     """K and M of one lattice, assembled once for one analysis and owned by it.
 
     ``LatticeMatrices(model, comm)``: SciPy CSR when ``comm`` is serial (None or one rank),
-    PETSc AIJ on ``comm``'s row bands otherwise (:func:`assemble`; collective).  Every step of
-    the analysis reads these (the static equilibrium, each contact state's pencil, the
+    PETSc AIJ on ``comm``'s row bands otherwise (:func:`assemble`).  Every step of the
+    analysis reads these (the static equilibrium, each contact state's pencil, the
     condensation, the friction range, flutter), so the lattice is assembled once per run (and,
     distributed, once more serially on every rank only where a consumer reads it whole).
-    :meth:`whole` gives SciPy K, M on every rank to the consumers that need them whole;
-    :meth:`destroy` (or leaving a ``with`` block) frees the PETSc matrices, collectively."""
+    They are assembled at their first use (:meth:`assemble`, or reading ``K`` or ``M``:
+    collective then), so that a consumer reading the lattice whole before any pencil exists
+    (the static equilibrium, on several ranks) does not hold its serial copy beside the
+    distributed one.  :meth:`whole` gives SciPy K, M on every rank to the consumers that need
+    them whole; :meth:`destroy` (or leaving a ``with`` block) frees the PETSc matrices,
+    collectively."""
 
     def __init__(self, model: LatticeModel, comm=None):
         self.model = model
         self.comm = mpi_comm(comm)
-        self.K, self.M = assemble(model, self.comm)
+        self._K = self._M = None
+        self._destroyed = False
 
     @classmethod
     def wrapping(cls, model: LatticeModel, K, M, comm=None) -> "LatticeMatrices":
         """K and M the caller assembled already (e.g. a benchmark that times the assembly on
         its own; SciPy, or PETSc on ``comm``), destroyed by :meth:`destroy` or by the caller."""
-        obj = cls.__new__(cls)
-        obj.model, obj.comm, obj.K, obj.M = model, mpi_comm(comm), K, M
+        obj = cls(model, comm)
+        obj._K, obj._M = K, M
         return obj
+
+    def assemble(self) -> "LatticeMatrices":
+        """K and M assembled, if they are not yet (collective on ``comm`` when distributed)."""
+        if self._destroyed:
+            raise RuntimeError("the lattice's K and M were destroyed")
+        if self._K is None:
+            self._K, self._M = assemble(self.model, self.comm)
+        return self
+
+    @property
+    def K(self):
+        return self.assemble()._K
+
+    @property
+    def M(self):
+        return self.assemble()._M
 
     @property
     def distributed(self) -> bool:
@@ -90,10 +111,11 @@ class LatticeMatrices:
     def destroy(self) -> None:
         """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
         if self.distributed:
-            for A in (self.K, self.M):
+            for A in (self._K, self._M):
                 if A is not None:
                     A.destroy()
-        self.K = self.M = None
+        self._K = self._M = None
+        self._destroyed = True
 
     def __enter__(self) -> "LatticeMatrices":
         return self
