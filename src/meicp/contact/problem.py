@@ -102,15 +102,15 @@ def contact_states(scene: Scene, lattice: LatticeMatrices) -> tuple[tuple[Contac
     """The scene's contact lines with their states resolved, and the static equilibrium
     result when it was needed (else None).  When it failed the lines are None: the caller
     decides whether that is an error.  The static equilibrium reads the lattice's K (whole, on
-    every rank) and is collective on its communicator."""
+    every rank: on several ranks a serial copy, dropped once its blocks are taken) and is
+    collective on its communicator."""
     model = lattice.model
     lines = contact_lines(scene, model)
     if not needs_static(scene):
         return with_states(lines, None), None
     log.info("static equilibrium: frictional contact LCP")
-    K, _ = lattice.whole()
-    static = static_equilibrium(scene, model=model, comm=lattice.comm, lines=lines, K=K)
-    del K
+    static = static_equilibrium(scene, model=model, comm=lattice.comm, lines=lines,
+                                stiffness=lambda: lattice.whole()[0])
     if not static.success:
         return None, static
     return with_states(lines, {BASE: static.states, **static.interface_states}), static

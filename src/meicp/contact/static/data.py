@@ -269,15 +269,16 @@ class StaticData:
 
 
 def static_data(scene: Scene, model: LatticeModel, *, tol: float, allow_floating: bool,
-                timings: dict, lines=None, K=None) -> StaticData:
+                timings: dict, lines=None, stiffness=None) -> StaticData:
     """Assemble :class:`StaticData`; ProblemError for a bad load, a mechanism, or a rigid
     mode that neither the boundary nor a contact holds (``timings``: ``assemble`` and the
-    rigid-mode part of ``factor``).  ``lines``: the scene's contact lines and ``K`` its SciPy
-    stiffness when the caller has them (an analysis builds both once), else built here."""
+    rigid-mode part of ``factor``).  ``lines``: the scene's contact lines when the caller has
+    them; ``stiffness``: a function giving its SciPy K (an analysis assembles once), else
+    assembled here; K itself is dropped on return, only its blocks are kept."""
     t0 = time.perf_counter()
     presc, u_p, notes = prescribed_displacements(model, scene.load)
     f = body_force(model, scene.load)
-    K = (assemble(model)[0] if K is None else K).tocsr()
+    K = (assemble(model)[0] if stiffness is None else stiffness()).tocsr()
     free = model.free_dofs()
     cts = contact_functionals(contact_lines(scene, model) if lines is None else lines, model)
     A_nf = cts.A_n[:, free].tocsr()

@@ -23,7 +23,7 @@ FORMULATIONS = ("auto", "condensed", "mixed")
 def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "auto",
                        classify_limit: int = 12, lcp_tol: float = LCP_TOL,
                        allow_floating: bool = True, formulation: str = "auto", comm=None,
-                       petsc_options: dict | None = None, lines=None, K=None, **lcp_options) -> StaticResult:
+                       petsc_options: dict | None = None, lines=None, stiffness=None, **lcp_options) -> StaticResult:
     """Static frictional equilibrium of ``scene`` under its ``[load]``; every contact's state.
 
     scene: a :class:`~meicp.scene.Scene`; model: its
@@ -43,8 +43,10 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     mixed formulation's PETSc solves are distributed over it (collective then: every rank
     calls with the same scene); the condensed formulation ignores it.
 
-    lines, K: the scene's contact lines (:func:`~meicp.contact.lines.contact_lines`) and its
-    SciPy stiffness when the caller has them already (``analyze`` assembles once per run).
+    lines: the scene's contact lines (:func:`~meicp.contact.lines.contact_lines`) when the
+    caller has them already; stiffness: a function giving the scene's SciPy K (``analyze``
+    assembles once per run), called when K is needed and not held after its pieces are taken
+    (the static solve itself keeps only K_ff); None: assembled here.
 
     Deterministic: under MPI every rank may call it with the same scene and gets the same
     answer.  Raises :class:`ProblemError` before any solve for a scene with no contact set
@@ -81,7 +83,8 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     model = model if model is not None else LatticeModel(scene)
     if not isinstance(model, LatticeModel) or (model.scene is not scene and model.scene != scene):
         raise ProblemError("model must be the LatticeModel of this scene")
-    data = static_data(scene, model, tol=tol, allow_floating=allow_floating, timings=timings, lines=lines, K=K)
+    data = static_data(scene, model, tol=tol, allow_floating=allow_floating, timings=timings, lines=lines,
+                       stiffness=stiffness)
     if formulation == "mixed":
         return solve_mixed(data, comm=comm, petsc_options=petsc_options, timings=timings, t_start=t_start)
     return solve_condensed(data, method=method, lcp_tol=lcp_tol, classify_limit=classify_limit,
