@@ -42,7 +42,7 @@ from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
-from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
+from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair, growth_bound
 from .lines import BASE, ContactState, state_names
 from .problem import pencil, pencil_of
 from .result import FlutterMode, growth_frequency
@@ -435,7 +435,7 @@ def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options:
     Collective on the lattice's communicator."""
     comm = lattice.comm
     t0 = time.perf_counter()
-    verdicts, modes, evidences = [], [], []
+    verdicts, modes, evidences, bounds = [], [], [], []
     for label, branch in grazing_branches(lines):
         own = pencil is None or label
         pen = pencil_of(lattice, branch, (), static) if own else pencil
@@ -446,13 +446,16 @@ def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options:
             if own:
                 pen.destroy()
         verdicts.append(part.flutter)
+        bounds.append(growth_bound(part))
         evidences.append((f"[{label}] " if label else "") + part.evidence)
     modes.sort(key=lambda m: (-m.growth_rate, -abs(m.sigma.imag)))
     evidence = " | ".join(evidences)
     if len(verdicts) > 1:
         evidence = ("grazing contacts, bracketed by a separated and a sliding branch (flutter only if every "
                     "branch has it): " + evidence)
-    return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0)
+    # a grazing contact has no linearisation: its branches bracket the motion, they bound nothing
+    bound = bounds[0] if len(bounds) == 1 else None
+    return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0, bound)
 
 
 def not_analysed(reason: str) -> FlutterVerdict:

@@ -51,9 +51,26 @@ class PencilFlutter:
 class FlutterVerdict:
     """What :func:`~meicp.contact.flutter.analyze_flutter` gives ``analyze``: the verdict, the
     modes in natural numbering (:class:`~meicp.contact.result.FlutterMode`, fastest first),
-    the evidence and the seconds it took."""
+    the evidence and the seconds it took.  ``growth_bound``: the largest growth rate any
+    flutter mode can have, when the whole spectrum proves it (:func:`growth_bound`), else
+    None."""
 
     flutter: bool | None
     modes: list
     evidence: str
     seconds: float = 0.0
+    growth_bound: float | None = None
+
+
+def growth_bound(part: PencilFlutter) -> float | None:
+    """An upper bound on Re λ = Re √σ over every non-real σ of one sliding pencil, or None.
+
+    Only a complete spectrum (the dense path, or a symmetry proof) bounds it, and only when no
+    eigenvalue is borderline or failed the residual gate: then the non-real σ are exactly the
+    modes found, each within its rounding ``radius`` r of the exact eigenvalue, and
+    Re √σ' = √((|σ'| + Re σ')/2) ≤ √((|σ| + Re σ)/2 + r) for |σ' − σ| ≤ r.  0 when there is
+    no non-real σ.  The search path never bounds it (it sees part of the spectrum)."""
+    if not part.complete or part.counts.get("borderline", 0) or part.counts.get("rejected", 0):
+        return None
+    bounds = [float(np.sqrt(0.5 * (abs(m.sigma) + m.sigma.real) + m.radius)) for m in part.modes]
+    return max(bounds, default=0.0)

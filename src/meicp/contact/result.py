@@ -139,6 +139,9 @@ class InstabilityResult(Result):
     evidence: one sentence on what the divergence search covered and what it proves.
     flutter_modes: certified :class:`FlutterMode` s, fastest (largest growth rate) first.
     flutter_evidence: what the flutter analysis searched and what it proves.
+    flutter_growth_bound: the largest growth rate Re λ any flutter mode can have, when the
+        whole spectrum proves it (dense path, no borderline eigenvalue; 0 when flutter is
+        excluded); None otherwise — the fastest mode found is then a lower bound only.
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
@@ -166,6 +169,7 @@ class InstabilityResult(Result):
     flutter: bool | None = None
     flutter_modes: list = field(default_factory=list)
     flutter_evidence: str = ""
+    flutter_growth_bound: float | None = None
     states: list = field(default_factory=list)
     interface_states: dict = field(default_factory=dict)
     static: object = None
