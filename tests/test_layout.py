@@ -18,8 +18,8 @@ LAZY = {"petsc4py", "slepc4py", "mpi4py", "h5py", "matplotlib", "siconos"}
 #: the rooms, and those each may import (besides itself), lowest first: ``_version`` is the
 #: package's version (``io``, ``info`` and ``cli`` report it: no arrow back up to the root),
 #: ``meicp`` the package's ``__init__``, ``api`` the public entry points that also read scene
-#: files.  ``lcp`` and ``eicp`` know nothing of PETSc: they dispatch on matrix kinds
-#: (``core.matrix``) and name their methods in a registry, and ``petsc`` builds on them —
+#: files, ``study`` the studies across a parameter built on them (``meicp.sweep``).
+#: ``lcp`` and ``eicp`` know nothing of PETSc: they dispatch on matrix kinds (``core.matrix``) and name their methods in a registry, and ``petsc`` builds on them —
 #: it registers the PETSc Mat's operations and the PETSc-based methods (as DOLFINx's
 #: ``fem/petsc.py`` builds on ``fem/assemble.py``)
 MAY_IMPORT = {
@@ -35,10 +35,12 @@ MAY_IMPORT = {
     "info": {"_version", "petsc"},
     "io": {"_version", "core", "scene", "lattice", "petsc", "plotting", "info"},
     "api": {"core", "scene", "lattice", "petsc", "contact", "io"},
-    "cli": {"_version", "core", "scene", "lattice", "petsc", "lcp", "eicp", "contact", "plotting", "info", "io"},
-    "meicp": {"_version", "core", "scene", "lattice", "lcp", "eicp", "petsc", "contact", "io", "api"},
+    "study": {"_version", "core", "scene", "lattice", "petsc", "contact", "plotting", "io", "api"},
+    "cli": {"_version", "core", "scene", "lattice", "petsc", "lcp", "eicp", "contact", "plotting", "info", "io",
+            "study"},
+    "meicp": {"_version", "core", "scene", "lattice", "lcp", "eicp", "petsc", "contact", "io", "api", "study"},
     "__main__": {"cli"},
-    "examples": {"core", "scene", "lattice", "petsc", "contact", "io", "api"},
+    "examples": {"core", "scene", "lattice", "petsc", "contact", "io", "api", "study"},
 }
 #: names that mean PETSc or SLEPc in code: the bindings, their modules, and the loaders
 #: that import them (comments, docstrings and other strings are prose or data, not use)

@@ -26,9 +26,10 @@ from .io.scene import load_scene  # noqa: E402
 from .lattice.model import LatticeModel  # noqa: E402
 from .contact.result import InstabilityResult, Mode  # noqa: E402
 from .api import analyze, assemble, critical_friction  # noqa: E402
+from .study import SweepResult, sweep  # noqa: E402
 
 __all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
            "classify", "MatrixClasses", "game_value", "GameValue",
            "load_scene", "Scene", "assemble", "LatticeModel",
            "solve_eicp", "EiCPResult", "EiCPSolution",
-           "analyze", "critical_friction", "InstabilityResult", "Mode"]
+           "analyze", "critical_friction", "InstabilityResult", "Mode", "sweep", "SweepResult"]

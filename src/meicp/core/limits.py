@@ -78,3 +78,12 @@ STATIC_MAX_CONTACTS = 2000
 STATIC_AUTO_CONDENSED_LIMIT = 200
 #: largest LCP for which the condensed path falls back to dense Lemke when its choice failed
 STATIC_LEMKE_LIMIT = 4 * STATIC_MAX_CONTACTS
+
+# -- studies ------------------------------------------------------------------------------------
+
+#: ``meicp.sweep`` gives each rank values of its own (each analysed on one process) below this
+#: many DOFs, and analyses every value on all ranks together from it on.  Split, P ranks do P
+#: values at a time, where one analysis on 2 ranks is 1.6× faster than on 1 (10⁶ DOFs, README);
+#: the price is memory, each rank holding a whole lattice: 4.1 GB at 10⁶ DOFs on one rank,
+#: so about 0.8 GB per rank here (time and memory ∝ n^1.1, n^1.05, docs/benchmarks.md)
+SWEEP_SPLIT_DOFS = 200_000

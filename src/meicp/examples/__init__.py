@@ -13,10 +13,9 @@ holds the failure map's small problems and their brute-force references.
 
 from __future__ import annotations
 
-import dataclasses
-
 from ..io.scene import scene_from_dict
 from ..scene import Scene
+from ..study.parameters import scene_with
 
 __all__ = ["two_layer_scene", "with_friction"]
 
@@ -58,8 +57,6 @@ def two_layer_scene(nx: int, rows: tuple[int, int], *, mu: float | None = None, 
 
 def with_friction(scene: Scene, mu: float) -> Scene:
     """``scene`` with friction ``mu`` on the rough base and on every frictional interface,
-    everything else (states included) unchanged."""
-    contact = dataclasses.replace(scene.contact, friction=mu) if scene.contact else None
-    interfaces = tuple(dataclasses.replace(i, friction=mu) if i.kind == "frictional" else i
-                       for i in scene.interfaces)
-    return dataclasses.replace(scene, contact=contact, interfaces=interfaces)
+    everything else (states included) unchanged: :func:`meicp.study.scene_with` of key
+    ``"friction"``."""
+    return scene_with(scene, "friction", mu)
