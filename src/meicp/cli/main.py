@@ -24,13 +24,13 @@ from ..core.errors import ConvergenceError, MeicpError, ProblemError
 from ..core.log import configure_logging, rank0_print, world_rank
 from ..petsc import init
 from ..petsc.options import PREFIXES, report_unused_options
-from . import eicp, info, lattice, lcp, solve
+from . import eicp, info, lattice, lcp, solve, sweep
 from .arguments import Parser, verbosity_of
 from .exit import MEANING, Exit
 from .signals import interrupted, interrupts_end_the_run, wait_for_the_end
 
 #: the subcommands, each a module with ``register(subparsers)``, in the order of ``--help``
-SUBCOMMANDS = (solve, info, lcp, eicp, lattice)
+SUBCOMMANDS = (solve, sweep, info, lcp, eicp, lattice)
 #: seconds a failing rank waits for the others to fail alike before aborting the job
 GRACE_SECONDS = 3.0
 
