@@ -1,14 +1,15 @@
-"""Stability map of a shipped scene: growth rates of divergence and of flutter against μ.
+"""Stability map of a shipped scene for docs/benchmarks.md: ``meicp.sweep`` over μ, plus the
+flutter onset by bisection and μ_c.
 
     .venv/bin/python scripts/stability_map.py [data/scenes/two_layers.toml] [--mu-max 6] [--steps 61]
 
-For each μ (the base's and every frictional interface's friction set to μ, states as the
-scene says) one ``meicp.analyze``: the divergence verdict and the growth rate √σ of the
-fastest divergence mode, the flutter verdict and the growth rate Re √σ (and frequency) of
-the fastest flutter mode (docs/flutter.md).  Then the smallest μ with flutter, by bisection
-on the flutter verdict (stopping, and saying so, where a verdict is undecided), and μ_c
-from ``meicp.critical_friction``.  Writes ``stability_map.csv`` and ``stability_map.png``
-into ``docs/benchmarks/`` (``$MEICP_BENCH_DIR`` overrides).
+The sweep (``meicp.sweep``, the same as ``meicp sweep SCENE --mu 0:MU_MAX:STEPS``) gives each
+μ's verdicts and growth rates; then the smallest μ with flutter by bisection on the flutter
+verdict between the grid's last flutter-free value and its first fluttering one (stopping,
+and saying so, where a verdict is undecided; a bisection on the verdict alone is no proof
+that flutter does not start and stop below), and μ_c from ``meicp.critical_friction``.
+Writes ``stability_map.csv`` (the sweep's columns) and ``stability_map.png`` into
+``docs/benchmarks/`` (``$MEICP_BENCH_DIR`` overrides).
 """
 
 from __future__ import annotations
@@ -19,65 +20,21 @@ import json
 import numpy as np
 
 import meicp
-from bench_common import ROOT, csv_path, out_dir, write_rows
-from meicp.examples import with_friction
-
-FIELDS = ["mu", "divergence", "divergence_growth", "flutter", "flutter_growth", "flutter_frequency",
-          "flutter_sigma_real", "flutter_sigma_imag", "flutter_modes", "stable"]
+from bench_common import ROOT, csv_path, out_dir
+from meicp.study import scene_with
 
 
-def point(scene, mu: float) -> dict:
-    r = meicp.analyze(with_friction(scene, mu))
-    fast = r.flutter_modes[0] if r.flutter_modes else None
-    return {"mu": f"{mu:.6g}", "divergence": r.divergence, "divergence_growth": r.modes[0].growth_rate if r.modes else 0.0,
-            "flutter": r.flutter, "flutter_growth": fast.growth_rate if fast else 0.0,
-            "flutter_frequency": fast.frequency if fast else "", "flutter_sigma_real": fast.sigma.real if fast else "",
-            "flutter_sigma_imag": fast.sigma.imag if fast else "", "flutter_modes": len(r.flutter_modes),
-            "stable": r.stable}
-
-
-def smallest_flutter_mu(scene, hi: float, rel_tol: float = 1e-6) -> dict:
-    """Bisection on analyze's flutter verdict in [0, hi] (flutter at hi).  An undecided verdict
-    ends it: the bracket is reported as it stands."""
-    lo, verdict_lo = 0.0, meicp.analyze(with_friction(scene, 0.0)).flutter
-    if verdict_lo is not False:
-        return {"lower": 0.0, "upper": 0.0, "note": f"flutter verdict at μ = 0 is {verdict_lo}"}
+def smallest_flutter_mu(scene, lo: float, hi: float, rel_tol: float = 1e-6) -> dict:
+    """Bisection on analyze's flutter verdict in [lo, hi] (no flutter, a proof, at lo; flutter
+    at hi).  An undecided verdict ends it: the bracket is reported as it stands."""
     while hi - lo > rel_tol * hi:
         mid = 0.5 * (lo + hi)
-        f = meicp.analyze(with_friction(scene, mid)).flutter
+        f = meicp.analyze(scene_with(scene, "friction", mid)).flutter
         if f is None:
             return {"lower": lo, "upper": hi, "note": f"undecided at μ = {mid:.8g} (a collision of eigenvalues "
                                                       "at rounding level): the bisection stops there"}
         lo, hi = (lo, mid) if f else (mid, hi)
     return {"lower": lo, "upper": hi, "note": "flutter verdict False (a proof) at lower, True at upper"}
-
-
-def chart(rows: list, extra: dict, path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    mu = np.array([float(r["mu"]) for r in rows])
-    div = np.array([float(r["divergence_growth"]) for r in rows])
-    flu = np.array([float(r["flutter_growth"]) for r in rows])
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    ax.plot(mu, div, "o-", ms=3, label="divergence: growth rate √σ of the fastest mode (real σ ≥ 0)")
-    ax.plot(mu, flu, "s-", ms=3, label="flutter: growth rate Re √σ of the fastest mode (complex σ)")
-    undecided = [float(r["mu"]) for r in rows if r["flutter"] is None or r["divergence"] is None]
-    if undecided:
-        ax.plot(undecided, np.zeros(len(undecided)), "kx", label="a verdict undecided")
-    if extra.get("mu_c") is not None:
-        ax.axvline(extra["mu_c"], color="C0", ls=":", lw=1, label=f"μ_c = {extra['mu_c']:.4g} (critical_friction)")
-    if extra.get("mu_flutter") is not None:
-        ax.axvline(extra["mu_flutter"], color="C1", ls=":", lw=1, label=f"flutter from μ ≈ {extra['mu_flutter']:.4g}")
-    ax.set_xlabel("friction coefficient μ")
-    ax.set_ylabel("growth rate (1/time)")
-    ax.set_title(f"{extra['scene']}: stability of steady sliding against μ", fontsize=10)
-    ax.legend(fontsize=8, loc="upper left")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
 
 
 def main() -> None:
@@ -87,17 +44,20 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=61)
     args = ap.parse_args()
     scene = meicp.load_scene(args.scene)
-    rows = [point(scene, float(mu)) for mu in np.linspace(0.0, args.mu_max, args.steps)]
-    first = next((float(r["mu"]) for r in rows if r["flutter"] is True), None)
-    bracket = smallest_flutter_mu(scene, first) if first else None
+    result = meicp.sweep(scene, "friction", np.linspace(0.0, args.mu_max, args.steps), progress=False)
+    onset = result.flutter_onset
+    bracket = (smallest_flutter_mu(scene, onset.lower, onset.upper)
+               if onset.lower is not None and onset.upper is not None else None)
     mu_c = meicp.critical_friction(scene)
-    extra = {"scene": args.scene.split("/")[-1], "mu_c": mu_c if np.isfinite(mu_c) else None,
-             "mu_flutter": bracket["upper"] if bracket else None, "bracket": bracket}
-    write_rows(csv_path("stability_map"), rows, FIELDS, keep=lambda r: False)
-    chart(rows, extra, out_dir() / "stability_map.png")
-    print(json.dumps(extra, indent=1))
-    for r in rows[::5]:
-        print(r)
+    marks = [(float(mu_c), f"μ_c = {mu_c:.4g} (critical_friction)")] if np.isfinite(mu_c) else []
+    if bracket:
+        marks.append((bracket["upper"], f"flutter from μ ≈ {bracket['upper']:.4g} (bisection)"))
+    result.to_csv(csv_path("stability_map"))
+    result.plot(out_dir() / "stability_map.png", marks=marks,
+                title=f"{args.scene.split('/')[-1]}: stability of steady sliding against μ")
+    print(json.dumps({"scene": args.scene.split("/")[-1], "mu_c": float(mu_c) if np.isfinite(mu_c) else None,
+                      "flutter_bracket": bracket}, indent=1))
+    print(result.summary())
 
 
 if __name__ == "__main__":
