@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .flutter_growth import FlutterGrowth
+
 
 @dataclass(frozen=True)
 class FlutterCandidate:
@@ -37,7 +39,8 @@ class PencilFlutter:
     """The flutter analysis of one sliding pencil: ``flutter`` (True / False / None),
     ``modes`` (:class:`FlutterCandidate` s, fastest first), ``evidence`` (what was searched,
     what it proves), ``complete`` (the whole spectrum was computed), ``counts`` (of
-    eigenvalues by kind, or of targets), ``rejected`` (:class:`RejectedPair` s)."""
+    eigenvalues by kind, or of targets), ``rejected`` (:class:`RejectedPair` s), ``growth`` (the certified bracket of the
+    fastest growth rate, :class:`~meicp.contact.flutter_growth.FlutterGrowth`)."""
 
     flutter: bool | None
     modes: list = field(default_factory=list)
@@ -45,15 +48,17 @@ class PencilFlutter:
     complete: bool = False
     counts: dict = field(default_factory=dict)
     rejected: list = field(default_factory=list)
+    growth: FlutterGrowth | None = None
 
 
 @dataclass(frozen=True)
 class FlutterVerdict:
     """What :func:`~meicp.contact.flutter.analyze_flutter` gives ``analyze``: the verdict, the
     modes in natural numbering (:class:`~meicp.contact.result.FlutterMode`, fastest first),
-    the evidence and the seconds it took."""
+    the evidence, the seconds it took and the certified growth bracket (None: not analysed)."""
 
     flutter: bool | None
     modes: list
     evidence: str
     seconds: float = 0.0
+    growth: FlutterGrowth | None = None
