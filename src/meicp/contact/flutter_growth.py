@@ -57,6 +57,12 @@ class FlutterGrowth:
     def __float__(self) -> float:
         return float(self.lower)
 
+    def __str__(self) -> str:
+        return self.describe()
+
+    def __repr__(self) -> str:
+        return f"FlutterGrowth(lower={self.lower:.10g}, upper={self.upper!r}, exact={self.exact})"
+
     @property
     def exact(self) -> bool:
         """The fastest mode found is proved the fastest (to EXACT_WIDTH relative)."""
