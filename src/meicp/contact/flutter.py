@@ -42,7 +42,8 @@ from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
-from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair, growth_bound
+from .flutter_growth import FlutterGrowth, combine_growths, dense_growth, search_growth
+from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState, state_names
 from .problem import pencil, pencil_of
 from .result import FlutterMode, growth_frequency
@@ -79,6 +80,8 @@ OFF_CLUSTER_NCV = 16
 #: dropping tolerance (MUMPS CNTL(7)): faster, with the certified pairs' backward errors as
 #: without it (docs/benchmarks-notes.md, "LOW_RANK_TOL")
 LOW_RANK_TOL = 1e-10
+#: the bracket of a pencil proved flutter-free: no non-real eigenvalue at all
+NO_FLUTTER = FlutterGrowth(0.0, 0.0, "no flutter (a proof)")
 
 
 def _norm1(M: np.ndarray) -> float:
@@ -126,18 +129,21 @@ def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: fl
     B = B.toarray() if sp.issparse(B) else np.asarray(B, dtype=float)
     n = A.shape[0]
     if n == 0:
-        return PencilFlutter(False, evidence="no retained DOF: nothing can move (a proof)", complete=True)
+        return PencilFlutter(False, evidence="no retained DOF: nothing can move (a proof)", complete=True,
+                             growth=NO_FLUTTER)
     if _symmetric_definite(A, B):
         return PencilFlutter(False, evidence="symmetric A and symmetric positive definite B: every σ is real "
                                              "(no friction coupling reaches the retained DOFs) — a proof",
-                             complete=True)
+                             complete=True, growth=NO_FLUTTER)
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
-        return PencilFlutter(None, evidence="the pencil has entries that are not finite: undecided")
+        return PencilFlutter(None, evidence="the pencil has entries that are not finite: undecided",
+                             growth=FlutterGrowth(0.0, None, "entries not finite: no bound"))
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
             return _dense_spectrum(A, B, residual_tol, radius_factor)
     except (np.linalg.LinAlgError, ValueError) as exc:  # QZ did not converge, or NaN came out
-        return PencilFlutter(None, evidence=f"the dense eigen-solve (LAPACK) failed ({exc}): undecided")
+        return PencilFlutter(None, evidence=f"the dense eigen-solve (LAPACK) failed ({exc}): undecided",
+                             growth=FlutterGrowth(0.0, None, "the dense eigen-solve failed: no bound"))
 
 
 def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_factor) -> PencilFlutter:
@@ -203,7 +209,9 @@ def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_fa
                 f"{counts['certified_real']} certified real, {counts['borderline']} borderline "
                 f"(non-reality at rounding level){rejected_note}"
                 + (" — a proof" if flutter is not None else ": undecided"))
-    return PencilFlutter(flutter, _fastest_first(modes), evidence, complete=True, counts=counts, rejected=rejected)
+    growth = dense_growth(w, radius, ~infinite & ~certified_real, modes, how)
+    return PencilFlutter(flutter, _fastest_first(modes), evidence, complete=True, counts=counts, rejected=rejected,
+                         growth=growth)
 
 
 def lambda_line_targets(growth: float, frequencies) -> list[complex]:
@@ -236,7 +244,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
         with SlidingPencilOps(A, B) as ops:
             if ops.symmetric_with_diagonal_mass():
                 return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
-                                                     "a proof")
+                                                     "a proof", growth=NO_FLUTTER)
             bound = ops.skew_bound()
             modes, rejected, disks, borderline, moved = [], [], [], 0, []
             for tau in targets:
@@ -282,7 +290,9 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                      "is not (not a proof of the growth rate)")
     else:
         evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
-    return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected)
+    growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets")
+    return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,
+                         growth=growth)
 
 
 # -- the scene level: branches, proxy, the choice of path -------------------------------------
@@ -379,7 +389,8 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     comm = mpi_comm(comm)
     n = int(pen.maps.retained.size)
     if n == 0:
-        return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True)
+        return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True,
+                             growth=NO_FLUTTER)
     if n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max):
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
         if comm is None or comm_size(comm) == 1:
@@ -390,7 +401,8 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     if memory is not None and need > memory:
         return PencilFlutter(None, evidence=(
             f"not searched: the complex shift-and-invert of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "
-            f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"))
+            f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"),
+            growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
     why = ""
     if targets is None:
         base = next((line.states for line in pen.lines if line.name == BASE), ())
@@ -435,7 +447,7 @@ def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options:
     Collective on the lattice's communicator."""
     comm = lattice.comm
     t0 = time.perf_counter()
-    verdicts, modes, evidences, bounds = [], [], [], []
+    verdicts, modes, evidences, growths = [], [], [], []
     for label, branch in grazing_branches(lines):
         own = pencil is None or label
         pen = pencil_of(lattice, branch, (), static) if own else pencil
@@ -446,16 +458,15 @@ def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options:
             if own:
                 pen.destroy()
         verdicts.append(part.flutter)
-        bounds.append(growth_bound(part))
+        growths.append(part.growth)
         evidences.append((f"[{label}] " if label else "") + part.evidence)
     modes.sort(key=lambda m: (-m.growth_rate, -abs(m.sigma.imag)))
     evidence = " | ".join(evidences)
     if len(verdicts) > 1:
         evidence = ("grazing contacts, bracketed by a separated and a sliding branch (flutter only if every "
                     "branch has it): " + evidence)
-    # a grazing contact has no linearisation: its branches bracket the motion, they bound nothing
-    bound = bounds[0] if len(bounds) == 1 else None
-    return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0, bound)
+    return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0,
+                          combine_growths(growths))
 
 
 def not_analysed(reason: str) -> FlutterVerdict:

@@ -160,7 +160,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     result.evidence = " | ".join(v.evidence for v in verdicts)
     sliding = sliding or not_analysed("flutter = false")
     result.flutter, result.flutter_modes, result.flutter_evidence = sliding.flutter, sliding.modes, sliding.evidence
-    result.flutter_growth_bound = sliding.growth_bound
+    result.flutter_growth = sliding.growth
     result.compose_verdict()
     # the question is answered once `stable` is decided: a certified flutter mode proves
     # instability even when the divergence search failed, so that failure leaves divergence

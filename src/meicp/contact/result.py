@@ -137,11 +137,13 @@ class InstabilityResult(Result):
         failed: a certified flutter mode answers the question (UNSTABLE, status ``solved``)
         even when the divergence search failed, which then stays undecided.
     evidence: one sentence on what the divergence search covered and what it proves.
-    flutter_modes: certified :class:`FlutterMode` s, fastest (largest growth rate) first.
+    flutter_modes: certified :class:`FlutterMode` s, fastest found (largest growth rate) first;
+        ``flutter_modes[0]`` is *the* fastest only when ``flutter_growth.exact``.
     flutter_evidence: what the flutter analysis searched and what it proves.
-    flutter_growth_bound: the largest growth rate Re λ any flutter mode can have, when the
-        whole spectrum proves it (dense path, no borderline eigenvalue; 0 when flutter is
-        excluded); None otherwise — the fastest mode found is then a lower bound only.
+    flutter_growth: the certified bracket of the fastest flutter growth rate
+        (:class:`~meicp.contact.flutter_growth.FlutterGrowth`: ``lower`` from a certified mode,
+        ``upper`` proved — no flutter mode grows faster — or None, ``exact``); None when
+        flutter was not analysed.
     states: the base's contact nodes, left to right, from stick | slip+ | slip- | separated |
         grazing; interface_states: the same per frictional interface (lower layer's name).
     static: the static equilibrium result when states were solved for (else None).
@@ -169,7 +171,7 @@ class InstabilityResult(Result):
     flutter: bool | None = None
     flutter_modes: list = field(default_factory=list)
     flutter_evidence: str = ""
-    flutter_growth_bound: float | None = None
+    flutter_growth: object = None
     states: list = field(default_factory=list)
     interface_states: dict = field(default_factory=dict)
     static: object = None
@@ -225,6 +227,7 @@ class InstabilityResult(Result):
         """The result as JSON-ready values, keyed like its attributes (``meicp solve --json``):
         analysis, verdict, stable, divergence, flutter, status, success, message, evidence,
         divergence_failure (None, or why the divergence search was inconclusive), flutter_evidence,
+        flutter_growth (``{lower, upper, exact, evidence}``, upper None when unbounded),
         proofs (an infinite σ-window end as the string "inf": :func:`json_number`), modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
         :meth:`FlutterMode.to_dict`), states, interface_states, sizes, timings, and the
         static equilibrium's status when states were solved for."""
@@ -238,6 +241,7 @@ class InstabilityResult(Result):
             "proofs": [{str(k): _json_value(v) for k, v in p.to_dict().items()} for p in self.proofs],
             "modes": [m.to_dict() for m in self.modes],
             "flutter_evidence": self.flutter_evidence,
+            "flutter_growth": None if self.flutter_growth is None else self.flutter_growth.to_dict(),
             "flutter_modes": [m.to_dict() for m in self.flutter_modes],
             "states": list(self.states),
             "interface_states": {str(k): list(v) for k, v in self.interface_states.items()},
@@ -263,6 +267,8 @@ class InstabilityResult(Result):
             lines.append(f"  ... {len(self.modes) - SUMMARY_MODES} more modes")
         if not self.modal:
             lines.append(f"  flutter: {self.flutter_verdict}: {self.flutter_evidence}")
+            if self.flutter_growth is not None:
+                lines.append(f"  flutter growth rate: {self.flutter_growth.describe()}")
             for k, m in enumerate(self.flutter_modes[:SUMMARY_MODES]):
                 lines.append(f"  flutter mode {k}: σ = {_complex(m.sigma)}, growth rate {m.growth_rate:.6g}, "
                              f"frequency {m.frequency:.6g}, residual {m.residual:.1e}")
@@ -321,10 +327,14 @@ class InstabilityResult(Result):
             rows.append(("flutter", self.flutter_verdict))
             if self.flutter_evidence:
                 rows.append(("flutter evidence", self.flutter_evidence))
+            if self.flutter_growth is not None:
+                rows.append(("flutter growth", self.flutter_growth.describe()))
             if self.flutter_modes:
                 n = len(self.flutter_modes)
+                fastest = ("fastest first" if self.flutter_growth is not None and self.flutter_growth.exact
+                           else "fastest found first, not proved the fastest")
                 rows.append(("flutter modes", f"{n} certified flutter mode{'s' if n != 1 else ''} "
-                                              "(σ complex, λ = √σ, fastest first)"))
+                                              f"(σ complex, λ = √σ, {fastest})"))
                 rows.append(("", f"  {'#':>3}  {'σ':>30}  {'growth Re λ':>12}  {'freq. |Im λ|':>12}  "
                                  f"{'residual':>9}"))
                 for k, m in enumerate(self.flutter_modes[:SUMMARY_MODES]):

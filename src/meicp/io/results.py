@@ -29,7 +29,10 @@ In the output directory::
                                    when a divergence solver failed: why divergence is
                                    undecided; ``status`` is then ``inconclusive`` unless
                                    flutter decided the verdict), ``flutter_evidence``,
-                                   ``n_flutter_modes``, ``divergence_tests`` (the test behind
+                                   ``n_flutter_modes``, ``flutter_growth_lower`` /
+                                   ``_upper`` (NaN: no bound proved) / ``_exact`` /
+                                   ``_evidence`` (the certified bracket of the fastest
+                                   flutter growth rate), ``divergence_tests`` (the test behind
                                    each MEiCP's divergence verdict: enumerate,
                                    rayleigh-inertia, rayleigh-window+condensed-…,
                                    certified-mode, none) and ``divergence_proofs`` (JSON:

@@ -77,7 +77,8 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "divergence_failure": getattr(result, "divergence_failure", None),
             "divergence_tests": ", ".join(p.test or "none" for p in getattr(result, "proofs", [])),
             "divergence_proofs": json.dumps(result.to_dict().get("proofs", []) if hasattr(result, "to_dict") else []),
-            "n_flutter_modes": len(prep["flutter_modes"])})
+            "n_flutter_modes": len(prep["flutter_modes"]),
+            **_growth_attrs(getattr(result, "flutter_growth", None))})
         f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
 
         g = f.create_group("scene_summary")
@@ -185,6 +186,16 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         if overrides:
             _set_attrs(f.create_group("overrides"), overrides)
         _describe(f)
+
+
+def _growth_attrs(growth) -> dict:
+    """``flutter_growth_lower`` / ``_upper`` (NaN: no bound proved) / ``_exact`` / ``_evidence``
+    (all absent when flutter was not analysed)."""
+    if growth is None:
+        return {}
+    return {"flutter_growth_lower": float(growth.lower),
+            "flutter_growth_upper": float("nan") if growth.upper is None else float(growth.upper),
+            "flutter_growth_exact": int(growth.exact), "flutter_growth_evidence": growth.evidence}
 
 
 def _write_flutter_modes(g, modes: list, n: int) -> None:

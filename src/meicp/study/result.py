@@ -61,7 +61,7 @@ class SweepRow:
         return cls(value=float(value), verdict=result.verdict, stable=result.stable, divergence=result.divergence,
                    sigma=float(result.modes[0].sigma) if result.modes else None, flutter=result.flutter,
                    flutter_growth=fast.growth_rate if fast else None,
-                   flutter_growth_bound=result.flutter_growth_bound,
+                   flutter_growth_bound=None if result.flutter_growth is None else result.flutter_growth.upper,
                    flutter_frequency=fast.frequency if fast else None, status=result.status,
                    seconds=float(elapsed), evidence=evidence[:EVIDENCE_CHARS])
 

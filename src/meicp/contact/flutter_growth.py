@@ -1,0 +1,125 @@
+"""The certified bracket of the fastest flutter growth rate (docs/flutter.md §4a).
+
+``lower``: the growth rate Re √σ of a certified flutter mode, less what rounding may take
+from it; ``upper``: proved — no non-real eigenvalue of the sliding pencil grows faster.  The
+fastest mode found is called *the fastest* only when the two meet (:attr:`FlutterGrowth.exact`).
+
+Rounding moves an eigenvalue σ by at most its radius r (the dense path's first-order bound
+``n·u·(‖A‖ + |σ|‖B‖)·κ``, the search's margin), so the exact eigenvalue lies in the disk
+``|z − σ| ≤ r`` and its growth rate in :func:`disk_growth_range`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .result import growth_frequency
+
+#: the bracket is exact when upper − lower ≤ EXACT_WIDTH·upper (issue 29)
+EXACT_WIDTH = 1e-6
+#: relative slack for the rounding of the bound's own arithmetic
+_SLACK = 8 * float(np.finfo(float).eps)
+
+
+def disk_growth_range(sigma: complex, radius: float) -> tuple[float, float]:
+    """``(lo, hi)``: every z with ``|z − σ| ≤ radius`` has lo ≤ Re √z ≤ hi.
+
+    A disk that misses the real axis lies in one open half-plane, where √z and √σ lie in one
+    quadrant, so ``|√z + √σ| ≥ |√σ|`` and ``|Re √z − Re √σ| ≤ |z − σ| / |√σ|``.  A disk that
+    meets it: ``Re √z = sqrt((|z| + Re z)/2) ≤ sqrt((|σ| + Re σ + 2r)/2)``, and 0 below."""
+    s = complex(sigma)
+    r = float(radius)
+    if not (np.isfinite(s.real) and np.isfinite(s.imag) and np.isfinite(r)):
+        return 0.0, math.inf
+    g = growth_frequency(s)[0]
+    if abs(s.imag) > r and abs(s) > 0:
+        d = r / math.sqrt(abs(s))
+        return max(g - d, 0.0) * (1 - _SLACK), (g + d) * (1 + _SLACK)
+    return 0.0, math.sqrt(max(0.0, 0.5 * (abs(s) + s.real + 2 * r))) * (1 + _SLACK)
+
+
+@dataclass(frozen=True)
+class FlutterGrowth:
+    """The certified bracket of the fastest flutter growth rate of steady sliding.
+
+    lower: a certified flutter mode grows at least this fast (0 when none is certified).
+    upper: no non-real eigenvalue of the sliding pencil grows faster (proved); None when no
+    bound is proved (the large-scale search).  ``upper == 0``: no flutter at all (a proof).
+    evidence: how each end was obtained.  ``float(growth)`` is ``lower``."""
+
+    lower: float
+    upper: float | None
+    evidence: str = ""
+
+    def __float__(self) -> float:
+        return float(self.lower)
+
+    def __str__(self) -> str:
+        return self.describe()
+
+    def __repr__(self) -> str:
+        return f"FlutterGrowth(lower={self.lower:.10g}, upper={self.upper!r}, exact={self.exact})"
+
+    @property
+    def exact(self) -> bool:
+        """The fastest mode found is proved the fastest (to EXACT_WIDTH relative)."""
+        return bool(self.upper is not None and self.upper - self.lower <= EXACT_WIDTH * self.upper)
+
+    @property
+    def width(self) -> float:
+        return math.inf if self.upper is None else self.upper - self.lower
+
+    def describe(self) -> str:
+        """One line for the CLI table and summaries."""
+        if self.upper == 0.0:
+            return "0: no flutter (proved)"
+        if self.exact:
+            return f"{self.lower:.8g}: the fastest, proved (bracket [{self.lower:.10g}, {self.upper:.10g}])"
+        found = "fastest found" if self.lower > 0 else "no certified mode"
+        bound = "no upper bound proved" if self.upper is None else f"proved ≤ {self.upper:.6g}"
+        return f"≥ {self.lower:.6g} ({found}, not proved the fastest; {bound})"
+
+    def to_dict(self) -> dict:
+        return {"lower": float(self.lower), "upper": None if self.upper is None else float(self.upper),
+                "exact": self.exact, "evidence": self.evidence}
+
+
+def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, modes: list,
+                 how: str) -> FlutterGrowth:
+    """The bracket from a complete spectrum ``w`` with radii: ``candidates`` marks the
+    eigenvalues that may be non-real (not certified real, finite); ``modes`` the certified
+    flutter modes (:class:`~meicp.contact.flutter_verdict.FlutterCandidate`)."""
+    upper = 0.0
+    for s, r in zip(w[candidates], radius[candidates]):
+        upper = max(upper, disk_growth_range(s, r)[1])
+    lower = max((disk_growth_range(m.sigma, m.radius)[0] for m in modes), default=0.0)
+    n = int(np.count_nonzero(candidates))
+    if n == 0:
+        text = f"{how}: every eigenvalue certified real — no flutter (a proof)"
+    else:
+        text = (f"{how}: the {n} eigenvalue(s) not certified real, each within its rounding disk, grow at most "
+                f"{upper:.10g}; the fastest certified mode at least {lower:.10g}")
+    return FlutterGrowth(float(lower), float(upper), text)
+
+
+def search_growth(modes: list, why_no_bound: str) -> FlutterGrowth:
+    """The bracket of a search that computed part of the spectrum: the fastest certified
+    mode below, no upper bound."""
+    lower = max((disk_growth_range(m.sigma, m.radius)[0] for m in modes), default=0.0)
+    return FlutterGrowth(float(lower), None, f"the fastest certified mode found grows at least {lower:.6g}; "
+                                      f"no upper bound: {why_no_bound}")
+
+
+def combine_growths(parts: list) -> FlutterGrowth | None:
+    """The bracket over grazing branches: the smallest lower bound (flutter is claimed only
+    when every branch has it) and the largest upper one."""
+    parts = [p for p in parts if p is not None]
+    if not parts:
+        return None
+    if len(parts) == 1:
+        return parts[0]
+    upper = None if any(p.upper is None for p in parts) else max(p.upper for p in parts)
+    return FlutterGrowth(min(p.lower for p in parts), upper, " | ".join(p.evidence for p in parts))

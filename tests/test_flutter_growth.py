@@ -1,0 +1,114 @@
+"""The certified bracket of the fastest flutter growth rate (docs/flutter.md §4a): the disk
+bound, the dense bracket against an independent QZ, the search's bracket that never claims
+the fastest, and the bracket in the CLI table, --json and results.h5."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import meicp
+from meicp.contact import flutter as fl
+from meicp.contact.flutter_growth import EXACT_WIDTH, FlutterGrowth, combine_growths, disk_growth_range
+from meicp.contact.problem import pencil
+
+from .conftest import ROOT
+from .test_flutter import lattice
+
+SCENES = ROOT / "data" / "scenes"
+
+
+@settings(max_examples=200, deadline=None)
+@given(re=st.floats(-50, 50), im=st.floats(-20, 20), r=st.floats(0, 5),
+       angle=st.floats(0, 2 * math.pi), t=st.floats(0, 1))
+def test_every_point_of_a_disk_grows_within_its_range(re, im, r, angle, t):
+    sigma = complex(re, im)
+    lo, hi = disk_growth_range(sigma, r)
+    z = sigma + t * r * complex(math.cos(angle), math.sin(angle))
+    g = np.sqrt(complex(z)).real
+    assert lo - 1e-12 * (1 + hi) <= g <= hi + 1e-12 * (1 + hi)
+
+
+def qz_growths(scene):
+    """Re √σ of every finite non-real σ of the sliding pencil, by scipy.linalg.eig on (A, B)."""
+    with pencil(scene) as pen:
+        A, B = pen.A.toarray(), pen.B.toarray()
+    w = sl.eig(A, B, right=False)
+    w = w[np.isfinite(w) & (np.abs(w.imag) > 1e-8 * np.abs(w).max())]
+    return np.sqrt(w.astype(complex)).real
+
+
+@pytest.mark.parametrize("scene", [lattice(20, (2, 2), 0.3), lattice(12, (3, 3), 1.0, states="slip-"),
+                                   lattice(16, (2, 3), 3.0, shear=0.5)], ids=["mu0.3", "slip-", "sheared"])
+def test_dense_bracket_is_exact_and_holds_the_fastest(scene):
+    r = meicp.analyze(scene)
+    g = r.flutter_growth
+    fastest = qz_growths(scene).max()
+    assert g.exact and g.lower <= fastest <= g.upper
+    assert g.upper - g.lower <= EXACT_WIDTH * g.upper
+    assert math.isclose(float(g), r.flutter_modes[0].growth_rate, rel_tol=1e-9)
+    assert "the fastest, proved" in g.describe()
+
+
+def test_interface_bracket_by_qz():
+    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+    g = meicp.analyze(scene).flutter_growth
+    assert g.exact and g.lower <= qz_growths(scene).max() <= g.upper
+
+
+def test_proved_flutter_free_is_a_zero_bracket():
+    r = meicp.analyze(lattice(20, (2, 2), 0.0))
+    assert r.flutter is False and r.flutter_growth.upper == 0.0 and r.flutter_growth.exact
+    assert "no flutter (proved)" in r.flutter_growth.describe()
+
+
+def test_search_bracket_never_claims_the_fastest():
+    scene = lattice(32, (8, 8), 2.0)
+    with pencil(scene) as pen:
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+        ref = fl.pencil_flutter(pen, scene)
+    assert got.flutter is True and got.growth.upper is None and not got.growth.exact
+    assert 0 < got.growth.lower <= ref.growth.upper
+    assert "not proved the fastest" in got.growth.describe()
+
+
+def test_branches_combine_to_the_widest_bracket():
+    a, b = FlutterGrowth(0.2, 0.2000000001, "a"), FlutterGrowth(0.1, 0.3, "b")
+    both = combine_growths([a, b])
+    assert (both.lower, both.upper) == (0.1, 0.3) and not both.exact
+    assert combine_growths([a, FlutterGrowth(0.1, None)]).upper is None
+    assert combine_growths([None]) is None
+
+
+def test_a_large_pencil_says_not_proved_in_the_table_json_and_h5(cli, tmp_path, monkeypatch):
+    import h5py
+
+    out = tmp_path / "run"
+    code, text, _ = cli("solve", SCENES / "two_layers.toml", "-o", out, "--json", "-q")
+    doc = json.loads(text)
+    assert code == 0 and doc["flutter_growth"]["exact"] is True
+    assert math.isclose(doc["flutter_growth"]["lower"], doc["flutter_modes"][0]["growth_rate"], rel_tol=1e-9)
+    with h5py.File(out / "results.h5") as f:
+        assert f.attrs["flutter_growth_exact"] == 1
+        assert math.isclose(f.attrs["flutter_growth_upper"], doc["flutter_growth"]["upper"])
+    code, text, _ = cli("solve", SCENES / "two_layers.toml", "--no-output", "-q")
+    assert "the fastest, proved" in text and "fastest first)" in text
+
+
+def test_search_result_rows_say_fastest_found(monkeypatch):
+    from meicp.core import limits
+
+    monkeypatch.setattr(limits, "FLUTTER_DENSE_MAX", 0)
+    scene = lattice(32, (8, 8), 2.0)
+    r = meicp.analyze(scene)
+    rows = dict((k, v) for k, v in r.summary_rows(scene) if k)
+    assert r.flutter is True and not r.flutter_growth.exact
+    assert "not proved the fastest" in rows["flutter growth"]
+    assert "fastest found first, not proved the fastest" in rows["flutter modes"]
+    assert r.to_dict()["flutter_growth"]["upper"] is None
