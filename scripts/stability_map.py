@@ -20,14 +20,13 @@ import numpy as np
 
 import meicp
 from bench_common import ROOT, csv_path, out_dir, write_rows
-from meicp.examples import with_friction
 
 FIELDS = ["mu", "divergence", "divergence_growth", "flutter", "flutter_growth", "flutter_frequency",
           "flutter_sigma_real", "flutter_sigma_imag", "flutter_modes", "stable"]
 
 
 def point(scene, mu: float) -> dict:
-    r = meicp.analyze(with_friction(scene, mu))
+    r = meicp.analyze(scene.with_friction(mu))
     fast = r.flutter_modes[0] if r.flutter_modes else None
     return {"mu": f"{mu:.6g}", "divergence": r.divergence, "divergence_growth": r.modes[0].growth_rate if r.modes else 0.0,
             "flutter": r.flutter, "flutter_growth": fast.growth_rate if fast else 0.0,
@@ -39,12 +38,12 @@ def point(scene, mu: float) -> dict:
 def smallest_flutter_mu(scene, hi: float, rel_tol: float = 1e-6) -> dict:
     """Bisection on analyze's flutter verdict in [0, hi] (flutter at hi).  An undecided verdict
     ends it: the bracket is reported as it stands."""
-    lo, verdict_lo = 0.0, meicp.analyze(with_friction(scene, 0.0)).flutter
+    lo, verdict_lo = 0.0, meicp.analyze(scene.with_friction(0.0)).flutter
     if verdict_lo is not False:
         return {"lower": 0.0, "upper": 0.0, "note": f"flutter verdict at μ = 0 is {verdict_lo}"}
     while hi - lo > rel_tol * hi:
         mid = 0.5 * (lo + hi)
-        f = meicp.analyze(with_friction(scene, mid)).flutter
+        f = meicp.analyze(scene.with_friction(mid)).flutter
         if f is None:
             return {"lower": lo, "upper": hi, "note": f"undecided at μ = {mid:.8g} (a collision of eigenvalues "
                                                       "at rounding level): the bisection stops there"}

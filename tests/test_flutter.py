@@ -98,7 +98,7 @@ def test_verdicts_compose_on_the_shipped_scene():
     scene = meicp.load_scene(SCENES / "two_layers.toml")
 
     def at(mu):
-        return meicp.analyze(dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=mu)))
+        return meicp.analyze(scene.with_friction(mu))
 
     r3, r1, r03 = at(3.0), at(1.0), at(0.3)
     assert (r3.divergence, r3.flutter, r3.stable, r3.verdict) == (True, True, False, "UNSTABLE")
