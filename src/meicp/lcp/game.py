@@ -61,6 +61,9 @@ class GameValue(Result):
     lower: float = float("nan")
     upper: float = float("nan")
 
+    def __repr__(self) -> str:
+        return f"GameValue({self.value:.6g} in [{self.lower:.6g}, {self.upper:.6g}], {self.status})"
+
     def to_dict(self) -> dict:
         return {
             "value": _plain(self.value),
