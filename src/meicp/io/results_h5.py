@@ -176,8 +176,9 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "max_mode_residual": float(np.nanmax(res)) if res.size and np.isfinite(res).any() else None,
             "eicp_solves": len(solves), "eicp_method": joined("method"),
             # one entry per grazing case, null where every DOF was held: meicp.load_results reads them back
-            "eicp_outcomes": json.dumps([None if e is None else {"method": e.method, "status": e.status,
-                                                                 "message": e.message} for e in result.eicp]),
+            "eicp_outcomes": json.dumps([None if e is None else {name: getattr(e, name, "")
+                                                                 for name in ("method", "status", "message")}
+                                         for e in result.eicp], default=str),
             "eicp_status": joined("status"), "eicp_message": joined("message"),
             "eicp_coverage": (json.dumps(coverage[0] if len(coverage) == 1 else coverage, default=str)
                               if any(coverage) else None)})

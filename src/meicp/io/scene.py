@@ -101,6 +101,7 @@ from pathlib import Path
 
 from .. import scene as scene_module
 from ..core.errors import ProblemError
+from ..core.validation import checked_keywords
 from ..scene import Scene
 from .problem_files import read_text
 from .scene_tables import SceneParser
@@ -158,6 +159,7 @@ def read_scene_text(path) -> str:
                            "is invalid): a scene file is TOML, which is UTF-8") from None
 
 
+@checked_keywords()
 def load_scene(path) -> Scene:
     """Read and validate a TOML scene file.  Raises :class:`ProblemError` naming the key."""
     return loads_scene(read_scene_text(path), source=str(path))
