@@ -90,6 +90,7 @@ def test_readme_python_example(monkeypatch):
     assert float(lines[3]) == pytest.approx(0.174, abs=5e-4)
     assert float(lines[4]) == pytest.approx(1.906, abs=5e-4)
     assert lines[5] == "True [1. 0. 2.]"
+    assert lines[6] == "InstabilityResult(UNSTABLE: divergence σ=0.3291 (1 mode), flutter growth 0.174 (3 modes), 40 DOFs)"
 
 
 def test_the_benchmarks_two_layer_scene_is_the_shipped_one():
