@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..eicp.problem import EiCPResult
 from .critical_friction.result import CriticalFriction
 from .divergence.verdict import DivergenceProof
 from .result import FlutterMode, InstabilityResult, Mode
 from .static.result import StaticResult
-from ..eicp.problem import EiCPResult
 
 #: results.h5 stores a three-way verdict as 1 / 0 / -1
 _VERDICT = {1: True, 0: False, -1: None}
