@@ -109,7 +109,6 @@ def test_divergence_born_above_zero_is_no_contradiction_of_mu_c():
     not exist up to mu_max, which the bisection check took for a contradiction and raised
     ConvergenceError (and `solve --critical-friction` threw the finished analysis away); the
     evidence now says where the modes start and that they start above σ = 0."""
-    import dataclasses
     import re
 
     import meicp
@@ -120,8 +119,7 @@ def test_divergence_born_above_zero_is_no_contradiction_of_mu_c():
     start = float(re.search(r"from μ ≈ ([0-9.]+), born at σ", got.evidence).group(1))
 
     def at(mu):
-        contact = dataclasses.replace(scene.contact, friction=mu)
-        return meicp.analyze(dataclasses.replace(scene, contact=contact), method="enumerate", flutter=False)
+        return meicp.analyze(scene.with_friction(mu), method="enumerate", flutter=False)
 
     above, below = at(start * 1.001), at(start * 0.999)
     assert above.divergence is True and min(m.sigma for m in above.modes) > 1e-3

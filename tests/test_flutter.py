@@ -98,7 +98,7 @@ def test_verdicts_compose_on_the_shipped_scene():
     scene = meicp.load_scene(SCENES / "two_layers.toml")
 
     def at(mu):
-        return meicp.analyze(dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=mu)))
+        return meicp.analyze(scene.with_friction(mu))
 
     r3, r1, r03 = at(3.0), at(1.0), at(0.3)
     assert (r3.divergence, r3.flutter, r3.stable, r3.verdict) == (True, True, False, "UNSTABLE")
@@ -317,7 +317,7 @@ def test_same_flutter_modes_on_two_ranks(comm):
     from mpi4py import MPI
 
     scene = lattice(16, (3, 3), 2.0)
-    one, two = meicp.analyze(scene), meicp.analyze(scene, comm=comm)
+    one, two = meicp.analyze(scene, comm=MPI.COMM_SELF), meicp.analyze(scene, comm=comm)
     assert one.flutter is two.flutter is True and len(one.flutter_modes) == len(two.flutter_modes)
     for a, b in zip(one.flutter_modes, two.flutter_modes):
         assert abs(a.sigma - b.sigma) <= 1e-12 * abs(a.sigma) and abs(abs(np.vdot(a.x, b.x)) - 1) < 1e-8

@@ -294,9 +294,7 @@ def test_condensed_critical_friction_beyond_the_former_limit():
     mu = critical_friction(sc)
     assert 1.0 < mu < 3.0
     # the smallest certified σ = 0 solution: just above it analyze finds a mode
-    from meicp.examples import with_friction
-
-    above, below = with_friction(sc, mu * (1 + 1e-4)), with_friction(sc, mu * (1 - 1e-4))
+    above, below = sc.with_friction(mu * (1 + 1e-4)), sc.with_friction(mu * (1 - 1e-4))
     assert analyze(above, method="active-set").stable is False
     assert analyze(below, method="active-set").divergence is not True
 

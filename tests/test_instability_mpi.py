@@ -1,4 +1,5 @@
-"""The instability analysis on 2 ranks gives the same modes as on 1 (to 1e-8)."""
+"""The instability analysis on 2 ranks gives the same modes as on 1 (to 1e-8).  The serial
+reference is ``comm=MPI.COMM_SELF``: ``meicp.analyze``'s ``comm=None`` is ``MPI.COMM_WORLD``."""
 
 import numpy as np
 import pytest
@@ -15,8 +16,10 @@ SCENES = ROOT / "data" / "scenes"
 def test_same_modes_on_one_and_two_ranks(comm, name, method):
     from meicp import analyze
 
+    from mpi4py import MPI
+
     par = analyze(SCENES / name, comm=comm, method=method)
-    ser = analyze(SCENES / name, method=method)
+    ser = analyze(SCENES / name, comm=MPI.COMM_SELF, method=method)
     assert par.stable == ser.stable
     assert len(par.modes) == len(ser.modes)
     for a, b in zip(par.modes, ser.modes):
@@ -35,7 +38,9 @@ def test_symmetric_pencil_stability_is_proved_by_inertia_on_two_ranks(comm):
     from meicp.io.scene import loads_scene
 
     text = (SCENES / "two_layers.toml").read_text().replace('states = "slip+"', 'states = "stick"')
-    for c in (comm, None):
+    from mpi4py import MPI
+
+    for c in (comm, None, MPI.COMM_SELF):
         r = analyze(loads_scene(text), comm=c, method="active-set")
         assert r.stable is True and r.proofs[0].test == "rayleigh-inertia", r.evidence
 
@@ -62,7 +67,9 @@ def test_modal_analysis_on_two_ranks(comm, name, stable):
     4-node cell's zero modes span a 3-dimensional space: compared by σ only)."""
     from meicp import analyze
 
-    par, ser = analyze(SCENES / name, comm=comm), analyze(SCENES / name)
+    from mpi4py import MPI
+
+    par, ser = analyze(SCENES / name, comm=comm), analyze(SCENES / name, comm=MPI.COMM_SELF)
     assert par.analysis == ser.analysis == "modal" and par.stable is ser.stable is stable
     assert [m.sigma for m in par.modes] == pytest.approx([m.sigma for m in ser.modes], rel=1e-9, abs=1e-12)
     if stable:
@@ -81,8 +88,10 @@ def test_the_verdict_at_scale_is_the_same_on_one_and_two_ranks(comm, state, mu, 
     from meicp.examples import two_layer_scene
 
     scene = two_layer_scene(60, (2, 2), mu=mu, states=state, shear=0.5)
+    from mpi4py import MPI
+
     par = analyze(scene, comm=comm, flutter=False)
-    ser = analyze(scene, flutter=False)
+    ser = analyze(scene, comm=MPI.COMM_SELF, flutter=False)
     assert par.divergence == ser.divergence is not None
     assert par.proofs[0].test == ser.proofs[0].test == test
     assert [m.sigma for m in par.modes] == pytest.approx([m.sigma for m in ser.modes], rel=1e-8)

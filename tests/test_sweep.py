@@ -143,7 +143,7 @@ def test_scene_with_sets_what_its_key_names(scene):
     load = scene_with(scene_with(scene, "shear", 0.2), "compression", 0.3).load
     assert load.top_displacement == (0.2, -0.3)
     assert scene_with(scene, "lattice.shear", 0.5).lattice.shear == 0.5
-    assert scene_with(scene, "mu", 0.7) == scene_with(scene, "contact.friction", 0.7)
+    assert scene_with(scene, "mu", 0.7).to_dict() == scene_with(scene, "contact.friction", 0.7).to_dict()
     itf = meicp.load_scene(SCENES / "frictional_interface.toml")
     name = itf.frictional_interfaces()[0].below
     both = scene_with(itf, "friction", 0.25)

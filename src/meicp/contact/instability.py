@@ -31,13 +31,15 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping
 
 import numpy as np
 
 from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.errors import ProblemError
 from ..core.progress import Progress
-from ..core.validation import as_real, check_tol
+from ..core import limits
+from ..core.validation import as_int, as_real, check_keywords, check_tol
 from ..eicp.solve import available_methods
 from ..lattice.model import LatticeModel
 from ..lattice.size import check_size
@@ -56,8 +58,14 @@ from .result import InstabilityResult, Mode
 log = logging.getLogger("meicp")
 
 #: keywords ``analyze`` sets itself, or that would turn the verdict into a statement about a
-#: window of σ only (``lam_max``)
-RESERVED_OPTIONS = ("J", "comm", "lam_max", "all_solutions")
+#: window of σ only (``lam_max``), each with the reason it is refused
+REFUSED_OPTIONS = {"J": "analyze sets it itself", "comm": "analyze sets it itself",
+                   "all_solutions": "analyze sets it itself",
+                   "lam_max": "the verdict covers every σ ≥ 0; use lam_min to filter the modes listed"}
+#: the eigen-solver keywords ``analyze`` hands on (any other name is a TypeError): shift,
+#: eigenpairs per solve, the active-set search's budget, the enumeration's limit of pairs,
+#: PETSc options for the eigen-solves (default: the scene's ``[petsc]``)
+SOLVER_OPTIONS = ("target", "nev", "max_iter", "max_j", "options")
 
 
 def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None, tol=None,
@@ -180,11 +188,9 @@ def _check_options(scene: Scene, method, from_call: bool, lam_min, tol, options:
     if method is not None and method not in available_methods():
         raise ProblemError(f"{'method' if from_call else '[solver] method'} must be one of "
                            f"{', '.join(available_methods())}, got {method!r}")
-    reserved = sorted(set(options) & set(RESERVED_OPTIONS))
-    if reserved:
-        why = ("the verdict covers every σ ≥ 0; use lam_min to filter the modes listed"
-               if "lam_max" in reserved else "analyze sets it itself")
-        raise ProblemError(f"analyze does not take {reserved[0]!r}: {why}")
+    check_keywords("analyze", sorted(options, key=lambda k: k not in REFUSED_OPTIONS), SOLVER_OPTIONS,
+                   REFUSED_OPTIONS)
+    _check_solver_options(options)
     name = "lam_min" if lam_min is not None else "[solver] lam_min"
     lam_min = scene.solver.lam_min if lam_min is None else lam_min
     lam_min = 0.0 if lam_min is None else as_real(lam_min, name)
@@ -194,6 +200,20 @@ def _check_options(scene: Scene, method, from_call: bool, lam_min, tol, options:
     name = "tol" if tol is not None else "[solver] tol"
     tol = scene.solver.tol if tol is None else tol
     return lam_min, (1e-10 if tol is None else check_tol(tol, name))
+
+
+def _check_solver_options(options: dict) -> None:
+    """The values of the eigen-solver keywords, before any work: ProblemError naming the one
+    that is wrong (None: the default)."""
+    checks = {"nev": lambda v: as_int(v, "nev", minimum=1), "target": lambda v: as_real(v, "target"),
+              "max_iter": lambda v: as_int(v, "max_iter", minimum=1),
+              "max_j": lambda v: as_int(v, "max_j", minimum=0, maximum=limits.MAX_ENUMERATED)}
+    for name, check in checks.items():
+        if options.get(name) is not None:
+            check(options[name])
+    petsc = options.get("options")
+    if petsc is not None and not (isinstance(petsc, Mapping) and all(isinstance(k, str) for k in petsc)):
+        raise ProblemError(f"options must be a dict of PETSc options (name → value), got {petsc!r}"[:300])
 
 
 def _check_flutter(scene: Scene, flutter) -> bool:

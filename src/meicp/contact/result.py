@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.results import Result
+from ..core.results import Result, brief
 from ..scene import STATES
 
 #: one character per contact state, for the compact per-column strip of the summary
@@ -45,6 +45,13 @@ class Mode:
     @property
     def growth_rate(self) -> float:
         return float(np.sqrt(max(self.sigma, 0.0)))
+
+    def __repr__(self) -> str:
+        if self.sigma < 0:
+            return f"Mode(σ={self.sigma:.6g}, ω={self.frequency:.6g}, residual {self.residual:.1e})"
+        sup = "".join(f", interface {k!r} support {brief(v)}" for k, v in self.interface_support.items())
+        return (f"Mode(σ={self.sigma:.6g}, growth rate {self.growth_rate:.6g}, support {brief(self.support)}"
+                f"{sup}, residual {self.residual:.1e})")
 
     @property
     def frequency(self) -> float:
@@ -89,6 +96,10 @@ class FlutterMode:
     @property
     def growth_rate(self) -> float:
         return growth_frequency(self.sigma)[0]
+
+    def __repr__(self) -> str:
+        return (f"FlutterMode(σ={_complex(self.sigma)}, growth rate {self.growth_rate:.6g}, "
+                f"frequency {self.frequency:.6g}, residual {self.residual:.1e})")
 
     @property
     def frequency(self) -> float:
@@ -161,6 +172,12 @@ class InstabilityResult(Result):
         grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
         case with every DOF held: nothing to solve); empty when no MEiCP was reached.
     sizes: DOF counts (all, retained, complementarity).
+    critical_friction: the critical friction stored beside the result (results.h5 of
+        ``meicp solve --critical-friction``, read back by :func:`meicp.load_results`);
+        ``analyze`` leaves it None (:func:`meicp.critical_friction` computes it).
+
+    ``repr()`` is one line (the verdict and the fastest modes); everything is in the fields,
+    ``summary()`` and ``to_dict()``.
     """
 
     analysis: str = "instability"
@@ -178,6 +195,24 @@ class InstabilityResult(Result):
     eicp: list = field(default_factory=list)
     proofs: list = field(default_factory=list)
     sizes: dict = field(default_factory=dict)
+    critical_friction: object = None
+
+    def __repr__(self) -> str:
+        head = self.verdict if self.success else f"FAILED ({self.status}), {self.verdict}"
+        n, m = len(self.modes), len(self.flutter_modes)
+        plural = {1: ""}
+        dofs = f", {self.sizes['dofs']:,} DOFs" if "dofs" in self.sizes else ""
+        if self.modal:
+            low = f", lowest ω={self.modes[0].frequency:.4g}" if n else ""
+            return f"InstabilityResult({head}: {n} vibration mode{plural.get(n, 's')}{low}{dofs})"
+        divergence = {True: "divergence", False: "no divergence"}.get(self.divergence, "divergence undecided")
+        if n:
+            divergence += f" σ={self.modes[0].sigma:.4g} ({n} mode{plural.get(n, 's')})"
+        flutter = {True: "flutter", False: "no flutter"}.get(self.flutter, "flutter undecided")
+        if m:
+            flutter += f" growth {self.flutter_modes[0].growth_rate:.4g} ({m} mode{plural.get(m, 's')})"
+        mu = "" if self.critical_friction is None else f", μ_c {float(self.critical_friction):.6g}"
+        return f"InstabilityResult({head}: {divergence}, {flutter}{mu}{dofs})"
 
     @property
     def modal(self) -> bool:

@@ -4,9 +4,11 @@
 
 from __future__ import annotations
 
+import inspect
+
 
 class SolverRegistry(dict):
-    """method name → solver function."""
+    """method name → solver function ``solver(problem, *, keyword options)``."""
 
     def register(self, name: str):
         """Decorator: the function becomes method ``name``."""
@@ -18,3 +20,13 @@ class SolverRegistry(dict):
     def available(self) -> list[str]:
         """The method names a caller may pass, ``"auto"`` included."""
         return sorted(self) + ["auto"]
+
+    def keywords(self) -> set[str]:
+        """Every keyword option some registered method names (its ``**_ignored`` aside): what
+        the entry point may hand on, so that a name none of them knows is a misspelling."""
+        kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+        names = set()
+        for solver in self.values():
+            params = list(inspect.signature(solver).parameters.values())[1:]  # the problem first
+            names.update(p.name for p in params if p.kind in kinds)
+        return names

@@ -5,17 +5,31 @@ check runs before compiled code sees the data: a sparse matrix's index arrays ar
 for range and order (SciPy's constructors do not, and an out-of-range column index then
 reads or writes outside the arrays), complex data is refused rather than cast (the
 imaginary part would be dropped), and tolerances, bounds and integer arguments are checked
-for range, finiteness and integrality.
+for range, finiteness and integrality.  Keyword arguments are checked by name
+(:func:`check_keywords`, :func:`checked_keywords`): a misspelt keyword is a TypeError that
+suggests the nearest known one, never silently dropped.
 """
 
 from __future__ import annotations
 
+import difflib
+import functools
+import inspect
 import numbers
 
 import numpy as np
 import scipy.sparse as sp
 
 from .errors import ProblemError
+
+
+def check_numeric(values: np.ndarray, name: str, what: str) -> None:
+    """Text is an error, never parsed: ``np.asarray(["1", "2"])`` would become [1.0, 2.0]
+    under a float cast, so a column read as strings would pass for numbers."""
+    kind = values.dtype.kind
+    if kind in "USVMm" or (kind == "O" and any(isinstance(v, (str, bytes)) for v in values.ravel())):
+        raise ProblemError(f"{name} is not a numeric {what}: it holds {values.dtype} values "
+                           f"(e.g. {values.ravel()[0]!r}); pass numbers, not text")
 
 
 def check_real(values, name: str) -> None:
@@ -107,6 +121,7 @@ def as_matrix(M, name: str = "M", *, square: bool = True, allow_sparse: bool = T
     else:
         try:
             arr = np.asarray(M)
+            check_numeric(arr, name, "matrix")
             check_real(arr, name)
             M = np.array(arr, dtype=np.float64)
         except (TypeError, ValueError) as exc:
@@ -129,6 +144,7 @@ def as_vector(q, n: int, name: str = "q") -> np.ndarray:
     """Return ``q`` as a finite real float64 vector of length ``n``."""
     try:
         arr = np.asarray(q)
+        check_numeric(arr, name, "vector")
         check_real(arr, name)
         q = np.array(arr, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -192,6 +208,65 @@ def as_int(value, name: str, *, minimum: int | None = None, maximum: int | None 
     if maximum is not None and v > maximum:
         raise ProblemError(f"{name} must be ≤ {maximum}, got {v}")
     return v
+
+
+def as_positive(value, name: str, *, maximum: float | None = None) -> float:
+    """A finite real number > 0 (and ≤ ``maximum``): a bound, a step, a tolerance."""
+    v = as_real(value, name)
+    if not v > 0:
+        raise ProblemError(f"{name} must be > 0, got {v!r}")
+    if maximum is not None and v > maximum:
+        raise ProblemError(f"{name} must be ≤ {maximum:g}, got {v!r}")
+    return v
+
+
+def as_flag(value, name: str, *, allow_none: bool = False) -> bool | None:
+    """True or False (NumPy's bool too), or None when ``allow_none``; 1, "yes" are refused."""
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, (bool, np.bool_)):
+        raise ProblemError(f"{name} must be True or False{' or None' if allow_none else ''}, got {value!r}")
+    return bool(value)
+
+
+# -- keyword arguments -------------------------------------------------------------------
+
+def unknown_keyword(function: str, name: str, known) -> TypeError:
+    """The TypeError Python raises for an unexpected keyword, with the nearest known one."""
+    near = difflib.get_close_matches(str(name), sorted(known), n=1)
+    hint = f"; did you mean {near[0]!r}?" if near else f"; it takes {', '.join(sorted(known))}"
+    return TypeError(f"{function}() got an unexpected keyword argument {name!r}{hint}")
+
+
+def check_keywords(function: str, given, known, refused=None) -> None:
+    """Every name in ``given`` among ``known``: else a TypeError naming the nearest known
+    one.  ``refused``: names a caller might expect to work, each with the reason it does not
+    (a ProblemError: the name is right, the request is not)."""
+    for name in given:
+        if refused and name in refused:
+            raise ProblemError(f"{function} does not take {name!r}: {refused[name]}")
+        if name not in known:
+            raise unknown_keyword(function, name, known)
+
+
+def checked_keywords(*, more=None, refused=None):
+    """Decorator: the function's keyword arguments checked by name before it runs
+    (:func:`check_keywords`), so that ``analyze(scene, flutterr=False)`` is a TypeError
+    that says ``did you mean 'flutter'?``.  Known: the function's own parameters, and
+    ``more()`` (the options its ``**options`` hands on, e.g. a solver registry's, read at
+    call time) when given.  ``help()`` and :func:`inspect.signature` show the function's own
+    signature and docstring."""
+    def wrap(func):
+        kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+        own = {n for n, p in inspect.signature(func).parameters.items() if p.kind in kinds}
+        not_own = {k: v for k, v in (refused or {}).items() if k not in own}
+
+        @functools.wraps(func)
+        def checked(*args, **kwargs):
+            check_keywords(func.__name__, kwargs, own | set(more() if more else ()), not_own)
+            return func(*args, **kwargs)
+        return checked
+    return wrap
 
 
 def scale(M) -> float:

@@ -33,7 +33,7 @@ import numpy as np
 from ..core import limits
 from ..core.errors import ProblemError
 from ..core.matrix import is_petsc_mat, matrix_shape, matvec, max_abs_entry, row_max_abs, to_dense
-from ..core.results import Result
+from ..core.results import Result, brief, brief_text
 from ..core.validation import as_index_set, as_int, as_matrix, as_real, check_tol
 
 #: default relative certificate tolerance
@@ -127,6 +127,9 @@ class EiCPSolution:
     def sigma(self) -> float:  # the instability problem's name for λ (σ = growth rate²)
         return self.lam
 
+    def __repr__(self) -> str:
+        return f"EiCPSolution(λ={self.lam:.10g}, support {brief(self.support)}, residual {self.residual:.1e})"
+
 
 @dataclass
 class EiCPResult(Result):
@@ -150,6 +153,14 @@ class EiCPResult(Result):
     @property
     def lam(self) -> float | None:
         return self.solutions[0].lam if self.solutions else None
+
+    def __repr__(self) -> str:
+        n = len(self.solutions)
+        if n:
+            lams = brief([s.lam for s in self.solutions], 4)
+            return (f"EiCPResult({self.status} by {self.method}: {n} solution{'s' if n != 1 else ''}, λ={lams}, "
+                    f"max residual {max(s.residual for s in self.solutions):.1e})")
+        return f"EiCPResult({self.status} ({self.method or 'no method'}): {brief_text(self.message)})"
 
     def summary(self) -> str:
         head = f"{self.method}: {self.status}, {len(self.solutions)} solution(s)"

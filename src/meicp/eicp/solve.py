@@ -24,10 +24,11 @@ import time
 import numpy as np
 
 from ..core import limits
-from ..core.comm import mpi_comm
+from ..core.comm import check_comm, mpi_comm
 from ..core.errors import PetscOptionError, ProblemError, SolverNotFound
 from ..core.matrix import is_symmetric, matrix_comm
 from ..core.registry import SolverRegistry
+from ..core.validation import as_flag, checked_keywords
 from .budget import check_enumeration_work
 from .enumeration import enumerate_eicp
 from .problem import DEFAULT_TOL, EiCPProblem, EiCPResult, check_options
@@ -51,21 +52,62 @@ register = SOLVERS.register
 available_methods = SOLVERS.available
 
 
+@checked_keywords(more=lambda: SOLVERS.keywords())
 def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = False, lam_min=None,
-               tol: float = DEFAULT_TOL, comm=None, **kwargs) -> EiCPResult:
+               tol: float = DEFAULT_TOL, comm=None, **method_options) -> EiCPResult:
     """Solve the (M)EiCP ``w = (λB − A)x, x_J ≥ 0, w_J ≥ 0, x_Jᵀw_J = 0, w_F = 0``.
 
-    A, B: NumPy, SciPy sparse, or PETSc Mat (collective on its communicator).  J: the
-    complementarity indices (default all: the EiCP).  all_solutions: enumerate every
-    solution (small |J| only).  lam_min: only solutions with λ ≥ lam_min.  tol: relative
-    certificate tolerance.  comm: split the enumeration across its ranks.  ``enumerate``
-    (by name or all_solutions) is refused before any work past ``limits.ENUMERATE_MAX_FLOPS``
-    (about an hour) unless ``max_j`` is given.  Other keywords go to the method (``target``,
-    ``nev``, ``max_iter``, ``options``...; ``auto`` hands them to every method it runs).
-    ``method="auto"`` runs the portfolio of :func:`auto_order` and records each method's
-    outcome in ``result.attempts``; ``result.method`` names the one that answered.  Every
-    returned solution passed its certificate; see :class:`EiCPResult` for the statuses.
+    Parameters
+    ----------
+    A, B : ndarray, SciPy sparse matrix or PETSc Mat, shape (n, n)
+        PETSc Mats make the call collective on their communicator.
+    J : array_like of int, or None
+        The complementarity indices (a boolean mask of length n too); None: all, the EiCP.
+    method : str
+        ``enumerate`` (every solution, support by support), ``active-set`` (one certified
+        solution, SLEPc, large sparse or distributed pencils), ``rayleigh`` (symmetric A, B
+        with B SPD), ``semismooth`` (PETSc SNES VI), or ``auto``: the portfolio of
+        :func:`auto_order`, which records each method's outcome in ``result.attempts``
+        (``result.method`` names the one that answered).
+    all_solutions : bool
+        Enumerate every solution (small |J| only); with ``auto`` it means ``enumerate``.
+    lam_min : float or None
+        Only solutions with λ ≥ lam_min (finite).
+    tol : float
+        Relative certificate tolerance in (0, 1e-2]; looser than 1e-6 is warned about.
+    comm : None, mpi4py or PETSc communicator
+        Splits the enumeration across its ranks (and carries the active-set search).
+        None: the matrices' own communicator for PETSc Mats, this process for NumPy/SciPy.
+    **method_options
+        Handed to the method, each checked by name (a misspelt one is a TypeError naming
+        the nearest): ``lam_max``, ``max_j`` (enumerate: raises its limit of pairs, and
+        accepts the cost: without it an enumeration past ``limits.ENUMERATE_MAX_FLOPS``,
+        about an hour, is refused before any work); ``target``, ``nev``, ``max_iter``,
+        ``give_up_after``, ``support0``, ``options`` (PETSc options), ``prefix``, ``follow``
+        (active-set); ``starts``, ``n_starts``, ``seed``, ``sense``, ``spg_tol``,
+        ``memory`` (rayleigh); ``x0``, ``lam0``, ``snes_type`` (semismooth).  ``auto``
+        hands them to every method it runs.
+
+    Returns
+    -------
+    EiCPResult
+        ``solutions`` (each ``lam``, ``x``, ``w``, ``support``, ``residual``: every one
+        passed its certificate), ``status`` (``solved``, ``no_solution`` when proved,
+        else a failure), ``method``, ``candidates``, ``coverage``, ``attempts``.
+
+    Raises
+    ------
+    ProblemError
+        Bad input, naming the argument (shapes, NaN, complex or text data, J out of range,
+        tol, a NaN λ bound, a comm that is none of the above).
+    SolverNotFound
+        An unknown method name.
     """
+    kwargs = method_options
+    check_comm(comm)
+    as_flag(all_solutions, "all_solutions")
+    if not isinstance(method, str):
+        raise ProblemError(f"method must be a method name (a string), got {method!r}")
     check_options(tol=tol, lam_min=lam_min, **kwargs)
     if not 0.0 < tol < 1.0:
         raise ProblemError(f"tol must lie in (0, 1), got {tol!r}")

@@ -3,8 +3,8 @@
 :func:`two_layer_scene` builds the project's one example lattice — two bonded layers, a
 soft one (k = 1, ρ = 1) under a stiff one (k = 5, ρ = 2), as in
 ``data/scenes/two_layers.toml`` — at any size, through the same parser as a scene file, so a
-built scene is checked exactly as a written one.  :func:`with_friction` sets every friction
-coefficient of a scene at once, for studies across μ.  :mod:`meicp.examples.failure_map`
+built scene is checked exactly as a written one (a study across μ changes it with
+:meth:`~meicp.scene.Scene.with_friction`).  :mod:`meicp.examples.failure_map`
 holds the failure map's small problems and their brute-force references.
 
     from meicp.examples import two_layer_scene
@@ -15,9 +15,8 @@ from __future__ import annotations
 
 from ..io.scene import scene_from_dict
 from ..scene import Scene
-from ..study.parameters import scene_with
 
-__all__ = ["two_layer_scene", "with_friction"]
+__all__ = ["two_layer_scene"]
 
 
 def two_layer_scene(nx: int, rows: tuple[int, int], *, mu: float | None = None, states="slip+",
@@ -53,10 +52,3 @@ def two_layer_scene(nx: int, rows: tuple[int, int], *, mu: float | None = None, 
     if petsc:
         d["petsc"] = dict(petsc)
     return scene_from_dict(d, source=title or f"two-layer lattice {nx} x {lower + upper}")
-
-
-def with_friction(scene: Scene, mu: float) -> Scene:
-    """``scene`` with friction ``mu`` on the rough base and on every frictional interface,
-    everything else (states included) unchanged: :func:`meicp.study.scene_with` of key
-    ``"friction"``."""
-    return scene_with(scene, "friction", mu)

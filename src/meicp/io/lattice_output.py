@@ -229,7 +229,7 @@ def write_lattice(path, scene, *, fields: dict | None = None, comm=None,
     """
     if parallel_io not in ("auto", "collective", "gather"):
         raise ProblemError(f"parallel_io must be 'auto', 'collective' or 'gather', got {parallel_io!r}")
-    model = as_model(as_scene(scene))
+    model = as_model(scene if isinstance(scene, LatticeModel) else as_scene(scene))
     mcomm = mpi_comm(comm)
     rank, size = (0, 1) if mcomm is None else (mcomm.Get_rank(), mcomm.Get_size())
     path = Path(path)

@@ -62,11 +62,14 @@ In the output directory::
 ``/flutter_modes``                 (docs/flutter.md) ``sigma_real``, ``sigma_imag``,
                                    ``growth_rate`` (Re sqrt(sigma)), ``frequency``
                                    (|Im sqrt(sigma)|), ``residual``, ``radius`` (f,),
-                                   ``x_real``, ``x_imag`` (f, n_dofs), ``branch`` (f,) S;
+                                   ``x_real``, ``x_imag`` (f, n_dofs), ``branch``,
+                                   ``found_by`` (f,) S;
                                    ``mode_<k>/support``, ``mode_<k>/interface_support/<below>``
 ``/certificates``                  ``mode_residual`` (m,); attributes ``result_residual``,
                                    ``max_mode_residual``, ``eicp_method``, ``eicp_status``,
-                                   ``eicp_message``, ``eicp_coverage`` (JSON)
+                                   ``eicp_message``, ``eicp_coverage`` (JSON),
+                                   ``eicp_outcomes`` (JSON: method, status, message of
+                                   each MEiCP, null where every DOF was held)
 ``/critical_friction`` (when       attributes ``value`` (inf: none found), ``found``, and
 computed)                          ``lower``, ``upper``, ``exact``, ``evidence`` as far as
                                    known (:func:`critical_friction_record`)

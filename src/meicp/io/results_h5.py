@@ -176,6 +176,10 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "result_residual": getattr(result, "residual", float("nan")),
             "max_mode_residual": float(np.nanmax(res)) if res.size and np.isfinite(res).any() else None,
             "eicp_solves": len(solves), "eicp_method": joined("method"),
+            # one entry per grazing case, null where every DOF was held: meicp.load_results reads them back
+            "eicp_outcomes": json.dumps([None if e is None else {name: getattr(e, name, "")
+                                                                 for name in ("method", "status", "message")}
+                                         for e in result.eicp], default=str),
             "eicp_status": joined("status"), "eicp_message": joined("message"),
             "eicp_coverage": (json.dumps(coverage[0] if len(coverage) == 1 else coverage, default=str)
                               if any(coverage) else None)})
@@ -210,6 +214,7 @@ def _write_flutter_modes(g, modes: list, n: int) -> None:
     g.create_dataset("residual", data=column(lambda m: m["mode"].residual))
     g.create_dataset("radius", data=column(lambda m: m["mode"].radius))
     g.create_dataset("branch", data=_strings([m["mode"].branch for m in modes], 64))
+    g.create_dataset("found_by", data=_strings([m["mode"].found_by for m in modes], 128))
     X = np.stack([m["x"] for m in modes]) if modes else np.zeros((0, n), dtype=complex)
     kw = {"chunks": (1, n), "compression": "gzip", "compression_opts": 4} if modes and n > 4096 else {}
     g.create_dataset("x_real", data=X.real, **kw)

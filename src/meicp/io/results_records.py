@@ -5,11 +5,11 @@ when known, else regenerated from the parsed scene by :func:`scene_to_toml`).
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import os
 import platform
+import re
 from pathlib import Path
 
 import numpy as np
@@ -67,50 +67,22 @@ def _toml_value(v) -> str:
     raise TypeError(f"cannot write {v!r} as TOML")
 
 
-def _fields(obj, skip=()) -> list:
-    """(key, value) of a scene dataclass, in declaration order: scene.py names every field
-    after its TOML key, so new keys are written without changes here."""
-    return [(f.name, getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.name not in skip]
+def _toml_key(key: str) -> str:
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
 
 
 def scene_to_toml(scene: Scene) -> str:
     """A TOML text that :func:`~meicp.io.scene.loads_scene` reads back to an equal scene
-    (``source`` aside): the record of a scene built in code, with no file behind it."""
-    lines = []
-
-    def table(header, items):
-        lines.append("")
-        lines.append(header)
-        for key, value in items:
-            if value is not None:
-                lines.append(f"{key} = {_toml_value(value)}")
-
-    if scene.title:
-        lines.append(f"title = {_toml_value(scene.title)}")
-    table("[lattice]", _fields(scene.lattice))
-    for layer in scene.layers:
-        table("[[layers]]", _fields(layer))
-    for e in scene.embedded:
-        table("[[embedded]]", _fields(e))
-    table("[boundary]", _fields(scene.boundary))
-    for itf in scene.interfaces:
-        if not itf.declared:
-            continue
-        if itf.bonded:
-            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind), ("stiffness", itf.stiffness)])
-        else:
-            table("[[interfaces]]", [("below", itf.below), ("kind", itf.kind),
-                                     ("friction", itf.friction), ("states", itf.states)])
-    if scene.contact is not None:
-        table("[contact]", _fields(scene.contact))
-    if scene.load is not None:
-        table("[load]", _fields(scene.load))
-    table("[solver]", _fields(scene.solver))
-    if len(scene.petsc):
-        lines.append("")
-        lines.append("[petsc]")
-        for key, value in scene.petsc.items():
-            lines.append(f"{json.dumps(key)} = {_toml_value(value)}")
+    (``source`` aside): the record of a scene built in code, with no file behind it —
+    :meth:`Scene.to_dict <meicp.scene.Scene.to_dict>` written as TOML."""
+    table = scene.to_dict()
+    lines = [f"title = {_toml_value(table.pop('title'))}"] if "title" in table else []
+    for name, value in table.items():
+        entries = value if isinstance(value, list) else [value]  # a list: an array of tables
+        for entry in entries:
+            lines.append("")
+            lines.append(f"[[{name}]]" if isinstance(value, list) else f"[{name}]")
+            lines.extend(f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in entry.items())
     return "\n".join(lines).lstrip("\n") + "\n"
 
 

@@ -43,6 +43,7 @@ DESCRIPTIONS = {
     ("flutter_modes", "x_imag"): {"long_name": "imaginary part of the complex flutter mode shape (a quarter "
                                                "period after the real part)"},
     ("flutter_modes", "branch"): {"long_name": "grazing branch of each flutter mode (empty: no grazing contact)"},
+    ("flutter_modes", "found_by"): {"long_name": "the method that found each flutter mode"},
     ("flutter_modes", "support"): {"long_name": "columns of the base contacts sliding in this flutter mode"},
     ("flutter_modes", "interface_support"): {"long_name": "columns of the interface's contacts sliding in "
                                                           "this flutter mode"},

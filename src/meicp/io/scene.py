@@ -99,7 +99,9 @@ import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
+from .. import scene as scene_module
 from ..core.errors import ProblemError
+from ..core.validation import checked_keywords
 from ..scene import Scene
 from .problem_files import read_text
 from .scene_tables import SceneParser
@@ -107,10 +109,27 @@ from .scene_tables import SceneParser
 
 # --------------------------------------------------------------------------- loading
 
-def as_scene(scene) -> Scene:
-    """``scene`` itself, or the Scene read from it when it is a scene file path (str or
-    ``os.PathLike``): what the public entry points accept."""
-    return load_scene(scene) if isinstance(scene, (str, os.PathLike)) else scene
+def as_scene(scene, name: str = "scene") -> Scene:
+    """The Scene that ``scene`` gives: what every public function taking a scene accepts.
+
+    - a :class:`Scene`: itself;
+    - a ``Mapping``: a parsed scene table, checked by :func:`scene_from_dict`;
+    - a ``str`` with a line break: TOML text, parsed by :func:`loads_scene` (a scene always
+      spans several lines: TOML puts each key on its own line);
+    - any other ``str`` or an ``os.PathLike``: the path of a scene file (:func:`load_scene`;
+      a missing file is "no such file").
+
+    Anything else is a ProblemError naming ``name`` and what it may be."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, Mapping):
+        return scene_from_dict(scene)
+    if isinstance(scene, str) and "\n" in scene:
+        return loads_scene(scene, source="<TOML text>")
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    raise ProblemError(f"{name} must be a Scene, a scene file's path, a dict or TOML text, "
+                       f"got {type(scene).__name__}")
 
 
 #: the largest scene file read (a per-node state list of 10⁵ columns is about 1 MB)
@@ -125,9 +144,13 @@ def read_scene_text(path) -> str:
     """The text of a scene file, read within bounds: a regular file (not ``/dev/zero`` or
     a FIFO), at most ``MAX_SCENE_BYTES``, UTF-8 (a byte-order mark is dropped).  Raises
     :class:`ProblemError` naming the file and the problem."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise ProblemError(f"a scene file's path must be a str or os.PathLike, got {type(path).__name__}")
     path = Path(path)
     if not path.exists():
-        raise ProblemError(f"cannot read scene file {str(path)!r}: no such file")
+        hint = (" (TOML text is taken as such only when it spans several lines)"
+                if any(c in str(path) for c in "=[") else "")
+        raise ProblemError(f"cannot read scene file {str(path)!r}: no such file{hint}")
     data = read_text(path, MAX_SCENE_BYTES, what="scene", limit_name="meicp.io.scene.MAX_SCENE_BYTES")
     try:
         return data.decode("utf-8")
@@ -136,6 +159,7 @@ def read_scene_text(path) -> str:
                            "is invalid): a scene file is TOML, which is UTF-8") from None
 
 
+@checked_keywords()
 def load_scene(path) -> Scene:
     """Read and validate a TOML scene file.  Raises :class:`ProblemError` naming the key."""
     return loads_scene(read_scene_text(path), source=str(path))
@@ -185,3 +209,7 @@ def _check_nesting(text: str, source: str) -> None:
 def scene_from_dict(data: Mapping, source: str = "<dict>") -> Scene:
     """Validate an already parsed scene table (as :mod:`tomllib` returns it)."""
     return SceneParser(source).parse(data)
+
+
+# Scene.with_friction & co. read their changed table back with this very parser
+scene_module.use_parser(scene_from_dict)

@@ -63,7 +63,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from ..core.validation import as_int, as_matrix, check_tol, scale, symmetry_error
+from ..core.validation import as_int, as_matrix, check_tol, checked_keywords, scale, symmetry_error
 from .classes_exact import _EXACT, _exact_tests, _r0_witness_ok
 from .classes_report import CLASS_NAMES, LABELS, MatrixClasses, _guarantees, _State
 from .classes_sufficient import _offdiag, _sufficient_tests
@@ -144,6 +144,7 @@ def _propagate(st: _State, n: int) -> None:
 # The entry point
 # ----------------------------------------------------------------------------------------
 
+@checked_keywords()
 def classify(M, *, exact_limit: int = 12, tol: float = 1e-10, dense_limit: int = 2000,
              det_limit: int = 500, game_limit: int = 1000) -> MatrixClasses:
     """Classify the square matrix ``M`` (dense or SciPy sparse) for LCP theory.

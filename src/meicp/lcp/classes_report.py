@@ -86,6 +86,16 @@ class MatrixClasses:
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        held = {True: [], False: [], None: []}
+        for name, value in self.classes().items():
+            held[value].append(name)
+        parts = [f"{label}: {', '.join(held[value])}" for label, value in (("yes", True), ("no", False),
+                                                                          ("undecided", None)) if held[value]]
+        if self.game_value is not None:
+            parts.append(f"game value {self.game_value.value:.4g}")
+        return f"MatrixClasses(n={self.n}; {'; '.join(parts)})"
+
     def classes(self) -> dict:
         """``{name: True/False/None}`` for every class."""
         return {name: getattr(self, name) for name in CLASS_NAMES}

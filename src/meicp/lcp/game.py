@@ -34,7 +34,7 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from ..core.results import SOLVED, Result
-from ..core.validation import as_matrix, scale
+from ..core.validation import as_matrix, checked_keywords, scale
 
 #: duality gap, relative to max|M|, below which the value is certified
 GAP_TOL = 1e-9
@@ -60,6 +60,9 @@ class GameValue(Result):
     y: np.ndarray | None = None
     lower: float = float("nan")
     upper: float = float("nan")
+
+    def __repr__(self) -> str:
+        return f"GameValue({self.value:.6g} in [{self.lower:.6g}, {self.upper:.6g}], {self.status})"
 
     def to_dict(self) -> dict:
         return {
@@ -106,6 +109,7 @@ def _minimiser_lp(A):
     return res
 
 
+@checked_keywords()
 def game_value(M) -> GameValue:
     """Value ``v(M) = min_{x∈Δ} max_{y∈Δ} xᵀMy`` with both optimal strategies, certified.
 

@@ -26,7 +26,7 @@ import scipy.sparse.linalg as spla
 
 from ..core.matrix import (checked_matrix, is_petsc_mat, matrix_shape, matvec, max_abs_entry, row_max_abs,
                            to_dense)
-from ..core.results import SOLVED, Result
+from ..core.results import SOLVED, Result, brief, brief_text
 from ..core.validation import as_vector
 
 #: default relative certificate tolerance
@@ -94,6 +94,12 @@ class LCPResult(Result):
     complementarity: float = float("nan")
     solutions: list = field(default_factory=list)
     attempts: list = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        if self.success:
+            return (f"LCPResult(solved by {self.method}: x={brief(self.x)}, residual {self.residual:.1e}, "
+                    f"{self.iterations} iterations)")
+        return f"LCPResult({self.status} ({self.method or 'no method'}): {brief_text(self.message)})"
 
     def summary(self) -> str:
         head = f"{self.method}: {self.status}"

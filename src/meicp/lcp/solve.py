@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import time
 
+from ..core.comm import check_comm
 from ..core.errors import ProblemError, SolverNotFound
 from ..core.matrix import is_symmetric
 from ..core.registry import SolverRegistry
-from ..core.validation import as_int, as_real, check_tol
+from ..core.validation import as_int, as_real, check_tol, checked_keywords
 from .enumeration import enumerate_lcp
 from .lemke import lemke
 from .pgs import pgs
@@ -68,19 +69,52 @@ def _symmetric(problem: LCPProblem) -> bool:
     return is_symmetric(problem.M, 1e-12)
 
 
-def solve_lcp(M, q, *, method: str = "auto", tol: float = DEFAULT_TOL, comm=None, **kwargs) -> LCPResult:
+@checked_keywords(more=lambda: SOLVERS.keywords())
+def solve_lcp(M, q, *, method: str = "auto", tol: float = DEFAULT_TOL, comm=None, **method_options) -> LCPResult:
     """Solve LCP(q, M): ``x ≥ 0``, ``w = Mx + q ≥ 0``, ``xᵀw = 0``.
 
-    M: ndarray, SciPy sparse matrix, or PETSc Mat (then collective on its communicator and
-    only ``newton``/``tao``/``auto`` apply).  q: vector of length n.  tol: relative
-    certificate tolerance (see :mod:`meicp.lcp.problem`).  Extra keywords go to the method
-    (``max_iter``, ``omega``, ``snes_type``, ``tao_type``, ``options`` for PETSc options).
-    Returns an :class:`LCPResult`; ``success`` only with a passing certificate.  Raises
-    :class:`ProblemError` on bad input (including tol outside (0, 1), a non-integer
-    ``max_iter``, a non-finite ``omega``) and :class:`SolverNotFound` on an unknown method.
+    Parameters
+    ----------
+    M : ndarray, SciPy sparse matrix or PETSc Mat, shape (n, n)
+        A PETSc Mat makes the call collective on its communicator, and only ``newton``,
+        ``tao`` and ``auto`` apply.
+    q : array_like of n numbers
+        Text is refused, not parsed.
+    method : str
+        ``lemke`` (complementary pivoting, dense), ``enumerate`` (every solution, n ≤ ``max_n``: 18, at most 26),
+        ``pgs`` (projected Gauss–Seidel / SOR, sparse symmetric M with positive diagonal),
+        ``newton`` (PETSc SNES VI), ``tao`` (PETSc TAO, symmetric M), or ``auto`` (by size,
+        sparsity and symmetry, falling back when a method fails; ``result.attempts``).
+    tol : float
+        Relative certificate tolerance in (0, 1e-2] (:mod:`meicp.lcp.problem`).
+    comm : None, mpi4py or PETSc communicator
+        Where ``newton`` and ``tao`` distribute a NumPy/SciPy M.  None: M's own
+        communicator for a PETSc Mat, this process for NumPy/SciPy data.
+    **method_options
+        Handed to the method, each checked by name (a misspelt one is a TypeError naming
+        the nearest): ``max_iter`` (every iterative method), ``pivot_tol`` (lemke),
+        ``max_n`` (enumerate), ``omega``, ``x0``, ``check_every`` (pgs), ``options`` (PETSc
+        options), ``snes_type`` (newton), ``tao_type`` (tao).
+
+    Returns
+    -------
+    LCPResult
+        ``x``, ``w``, ``status``, ``success`` (only with a passing certificate),
+        ``method``, ``iterations``, ``residual``, ``attempts``.
+
+    Raises
+    ------
+    ProblemError
+        Bad input, naming the argument (non-square or non-numeric M, q of another length,
+        tol outside (0, 1e-2], a non-integer ``max_iter``, a comm that is none of the above).
+    SolverNotFound
+        An unknown method name.
     """
     tol = check_tol(tol)
-    kwargs = check_options(kwargs)
+    check_comm(comm)
+    if not isinstance(method, str):
+        raise ProblemError(f"method must be a method name (a string), got {method!r}")
+    kwargs = check_options(method_options)
     problem = LCPProblem.from_data(M, q)
     if method == "auto":
         return _solve_auto(problem, tol=tol, comm=comm, **kwargs)

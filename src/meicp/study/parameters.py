@@ -39,7 +39,7 @@ from ..core.errors import ProblemError
 from ..core.validation import as_real
 from ..io.results_records import scene_to_toml
 from ..io.scene import loads_scene
-from ..scene import Load, Scene
+from ..scene import Scene
 
 #: alternative spellings of a key
 ALIASES = {"mu": "friction"}
@@ -114,7 +114,7 @@ def scene_with(scene: Scene, key: str, value) -> Scene:
     Returns
     -------
     Scene
-        The changed scene (its ``source`` kept).
+        The changed scene.
 
     Raises
     ------
@@ -127,18 +127,18 @@ def scene_with(scene: Scene, key: str, value) -> Scene:
     value = as_real(value, key)
     head, _, rest = key.partition(".")
     if key == "friction":
-        new = _with_friction(scene, value, base=True, interfaces=None)
-    elif key == "contact.friction":
-        new = _with_friction(scene, value, base=True, interfaces=())
-    elif head == "interfaces":
-        new = _with_friction(scene, value, base=False, interfaces=(rest.rsplit(".", 1)[0],))
-    elif head == "layers":
+        return scene.with_friction(value)
+    if key == "contact.friction":
+        return scene.with_friction(value, interface="base")
+    if head == "interfaces":
+        return scene.with_friction(value, interface=rest.rsplit(".", 1)[0])
+    if key in ("shear", "compression", "gravity"):
+        return _with_load(scene, key, value)
+    if head == "layers":
         name, field = rest.rsplit(".", 1)
         new = _with_layer(scene, name, field, value)
-    elif key == "lattice.shear":
+    else:  # lattice.shear
         new = dataclasses.replace(scene, lattice=dataclasses.replace(scene.lattice, shear=value))
-    else:
-        new = _with_load(scene, key, value)
     _check(new, key, value)
     return new
 
@@ -165,18 +165,6 @@ def _canonical(scene: Scene, key) -> str:
     elif key == "friction" or key == "contact.friction":
         why = " (the scene has no rough base" + ("" if key == "contact.friction" else " and no frictional interface") + ")"
     raise ProblemError(f"unknown parameter {key!r}{why}; this scene's parameters are: {', '.join(valid)}")
-
-
-def _with_friction(scene: Scene, mu: float, *, base: bool, interfaces) -> Scene:
-    """μ on the base (``base``) and on the frictional interfaces named in ``interfaces``
-    (None: all of them)."""
-    contact = scene.contact
-    if base and contact is not None:
-        contact = dataclasses.replace(contact, friction=mu)
-    changed = tuple(dataclasses.replace(i, friction=mu)
-                    if i.kind == "frictional" and (interfaces is None or i.below in interfaces) else i
-                    for i in scene.interfaces)
-    return dataclasses.replace(scene, contact=contact, interfaces=changed)
 
 
 def _with_layer(scene: Scene, name: str, field: str, value: float) -> Scene:
@@ -206,15 +194,12 @@ def _with_layer(scene: Scene, name: str, field: str, value: float) -> Scene:
 
 
 def _with_load(scene: Scene, key: str, value: float) -> Scene:
-    load = scene.load or Load()
-    ux, uy = load.top_displacement or (0.0, 0.0)
-    if key == "shear":
-        load = dataclasses.replace(load, top_displacement=(value, uy))
-    elif key == "compression":
-        load = dataclasses.replace(load, top_displacement=(ux, -value))
-    else:
-        load = dataclasses.replace(load, gravity=value)
-    return dataclasses.replace(scene, load=load)
+    """The top row's x displacement (``shear``), minus its y displacement (``compression``)
+    or ``gravity``, by :meth:`Scene.with_load`."""
+    if key == "gravity":
+        return scene.with_load(gravity=value)
+    ux, uy = (scene.load.top_displacement if scene.load else None) or (0.0, 0.0)
+    return scene.with_load(top_displacement=(value, uy) if key == "shear" else (ux, -value))
 
 
 def _check(scene: Scene, key: str, value: float) -> None:

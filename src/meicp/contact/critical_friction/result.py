@@ -30,6 +30,12 @@ class CriticalFriction(float):
     def __reduce__(self):
         return (CriticalFriction, (self.upper, self.lower, self.exact, self.evidence))
 
+    def __repr__(self) -> str:
+        return f"CriticalFriction({self.describe()})"
+
+    def __str__(self) -> str:  # print(mu_c) and f"{mu_c}" show the number, as for any float
+        return float.__repr__(self)
+
     @property
     def width(self) -> float:
         """(upper − lower)/upper: 0 when exact, inf without a mode."""

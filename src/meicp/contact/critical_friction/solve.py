@@ -13,6 +13,7 @@ from ...core import limits
 from ...core.comm import mpi_comm
 from ...core.errors import ConvergenceError, ProblemError
 from ...core.machine import available_memory
+from ...core.validation import as_flag, as_positive
 from ...lattice.model import LatticeModel
 from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
@@ -60,8 +61,10 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     whole reduced pencil; ConvergenceError if they disagree).  ``None`` (default): run it
     when that enumeration is within ``analyze``'s budget for enumerating (2^|J|·r³ ≤ 2e9
     flops, about ≤ 9 pairs on ~150 reduced DOFs), skip it beyond; ``True``: always;
-    ``False``: never.  Never run for a bracket.
+    ``False``: never.  Never run for a bracket.  ``tol``: the bisection's relative width in μ
+    (in (0, 0.01]).  ``mu_max``: finite, > 0.
     """
+    mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     comm = mpi_comm(comm)
     lattice, lines = _friction_states(scene)
     K, M = lattice.K, lattice.M
@@ -106,6 +109,17 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
         return CriticalFriction(upper, lower, True, text)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
     return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
+
+
+#: the loosest bisection tolerance: a relative width in μ
+MAX_BISECTION_TOL = 1e-2
+
+
+def check_arguments(mu_max, tol, bisection) -> tuple[float, float, bool | None]:
+    """``(mu_max, tol, bisection)`` checked: ProblemError naming the one that is wrong (a
+    ``mu_max`` of −1 used to fail inside as ``lam_min``, ``tol = 0`` to bisect forever)."""
+    return (as_positive(mu_max, "mu_max"), as_positive(tol, "tol", maximum=MAX_BISECTION_TOL),
+            as_flag(bisection, "bisection", allow_none=True))
 
 
 def friction_pencils(scene):

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.results import Result
+from ...core.results import Result, brief_text
 from ...lcp.problem import LCPResult
 
 
@@ -60,6 +60,17 @@ class StaticResult(Result):
     friction: dict = field(default_factory=dict)
     rigid_modes: int = 0
     notes: list = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        if not self.success:
+            return f"StaticResult({self.status}: {brief_text(self.message)})"
+        lines = ([("base", self.states)] if self.states else []) + [
+            (f"interface {name!r}", st) for name, st in self.interface_states.items()]
+        parts = [f"{where} " + ", ".join(f"{s} ×{list(st).count(s)}" for s in dict.fromkeys(st))
+                 for where, st in lines[:3]]
+        more = f", ... {len(lines) - 3} more" if len(lines) > 3 else ""
+        return (f"StaticResult({self.status}: {'; '.join(parts) or 'no contact'}{more}, "
+                f"equilibrium residual {self.equilibrium_residual:.1e})")
 
     def finish(self, t_states: float, t_start: float) -> "StaticResult":
         """Record the time of reading the states (since ``t_states``) and in all (since
