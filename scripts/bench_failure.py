@@ -149,14 +149,16 @@ def _run_analyze(sc, ref, common, rows, method):
     wall = time.perf_counter() - t0
     sig = sorted((m.sigma for m in r.modes), reverse=True)
     lams_ref = [l for l, _ in ref]
-    if r.stable is None:
+    # the references are divergence modes: judge the divergence verdict, not `stable`, which
+    # also counts flutter of steady sliding (docs/flutter.md) since issue 15
+    if r.divergence is None:
         outcome = "failed" if ref else "none_reported"
-    elif r.stable:
+    elif not r.divergence:
         outcome = "wrong" if ref else "correct"
     else:
         outcome = ("correct" if ref and all(any(lam_close(s, l) for l in lams_ref) for s in sig)
                    and lam_close(sig[0], max(lams_ref)) else "wrong")
-    verdict = {True: "stable", False: "unstable", None: "inconclusive"}[r.stable]
+    verdict = {True: "divergence", False: "no divergence", None: "divergence undecided"}[r.divergence]
     rows.append(dict(common, method="analyze" if method == "auto" else f"analyze {method}", wall_s=f"{wall:.4g}", status=f"{r.status}:{verdict}",
                      outcome=outcome, error=_fmt(_lam_error(sig, lams_ref)),
                      answer=";".join(f"{s:.10g}" for s in sig) or "none", detail=(r.evidence or "")[:200]))
