@@ -248,6 +248,30 @@ def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeyp
     assert fl.off_cluster(tau, 0).imag > tau.imag and fl.off_cluster(tau, 1).imag > fl.off_cluster(tau, 0).imag
 
 
+def test_a_target_where_nothing_converges_within_its_restarts_is_moved_off(monkeypatch):
+    """Inside a cluster Krylov–Schur may converge nothing in SEARCH_RESTARTS restarts: the
+    target moves off it, and only the last one gets LAST_RESTARTS."""
+    real = fl.complex_shift_solve
+    caps = []
+
+    def nothing_first(ops, tau, **kw):
+        caps.append(kw["max_it"])
+        pairs, info = real(ops, tau, **kw)
+        return ([] if len(caps) == 1 else pairs), info
+
+    monkeypatch.setattr(fl, "complex_shift_solve", nothing_first)
+    scene = lattice(32, (8, 8), 2.0)
+    with pencil(scene) as pen:
+        tau = complex(fl.proxy_targets(scene, ["slip+"] * 32, 1)[0])
+        got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
+    assert got.flutter is True and got.counts["moved"] == 1 and "restarts" in got.evidence
+    assert caps == [fl.SEARCH_RESTARTS, fl.SEARCH_RESTARTS]
+    caps.clear()
+    with pencil(scene) as pen:
+        fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12, off_cluster_tries=0)
+    assert caps == [fl.LAST_RESTARTS]
+
+
 def test_the_factors_are_analysed_in_node_blocks_only_when_they_divide_the_order():
     """MUMPS compresses blocks of |ICNTL(15)| rows, and factors wrongly, without an error,
     when they do not divide the order: on the 2n form blocks of 4 only for an even n (2n

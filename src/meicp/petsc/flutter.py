@@ -61,7 +61,8 @@ def _with_basis_and_low_rank(defaults: dict, ncv: int | None, low_rank: float | 
     return defaults
 
 
-def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
+def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None,
+                   max_it: int = 500) -> dict:
     """Code defaults of one complex shift-and-invert solve on the 2n form of a pencil of
     order ``n`` (nev, ncv there).  MUMPS analyses the graph of blocks of 4 rows of the 2n form
     (a DOF pair of the n form, i.e. a lattice node, when n is even: fewer flops than blocks
@@ -70,7 +71,7 @@ def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_ran
     MUMPS block-low-rank factor and solves (ICNTL(35) = 2) at that dropping tolerance
     (CNTL(7)); every pair is re-checked on (A, B) anyway (docs/flutter.md §4)."""
     defaults = {"eps_gen_non_hermitian": True, "eps_nev": nev, "eps_target": 0.0, "eps_target_magnitude": True,
-                "eps_tol": tol, "eps_max_it": 500, "st_type": "sinvert", "st_ksp_type": "preonly",
+                "eps_tol": tol, "eps_max_it": max_it, "st_type": "sinvert", "st_ksp_type": "preonly",
                 "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps", "st_mat_mumps_icntl_7": 2,
                 "st_mat_mumps_icntl_15": -4 if n % 2 == 0 else -2}
     return _with_basis_and_low_rank(defaults, ncv, low_rank)
@@ -171,7 +172,8 @@ def diagonal_of(B, B_local=None):
     return None if _allreduce(B.getComm(), bad) else d
 
 
-def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None) -> dict:
+def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_rank: float | None = None,
+                     max_it: int = 500) -> dict:
     """Code defaults of one complex shift-and-invert solve with a complex MUMPS factor
     (:class:`~meicp.petsc.mumps_c.ComplexFactor`): SLEPc's Krylov–Schur on the operator
     K_τ⁻¹B₂ of the 2n form (nev, ncv there), and the factor's controls under the names the 2n
@@ -180,7 +182,7 @@ def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_r
     even — none when odd, since blocks that do not divide the order give a wrong factor
     without an error; ``low_rank``: block-low-rank factor and solves at that CNTL(7)."""
     defaults = {"eps_type": "krylovschur", "eps_non_hermitian": True, "eps_largest_magnitude": True,
-                "eps_nev": nev, "eps_tol": tol, "eps_max_it": 500, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
+                "eps_nev": nev, "eps_tol": tol, "eps_max_it": max_it, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
     return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
@@ -206,7 +208,7 @@ class _ComplexInverse:
 
 
 def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, ncv: int | None = 12,
-                        tol: float = 1e-12, low_rank: float | None = None,
+                        tol: float = 1e-12, low_rank: float | None = None, max_it: int = 500,
                         options: dict | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
     shift-and-invert on the real 2n form (every σ of the real form comes with its
@@ -217,7 +219,8 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     pairs = [(σ with Im σ ≥ 0, x gathered on every rank, backward error on (A, B))], info =
     {``radius``: the largest |σ − τ| among the converged (the disk searched), ``nconv``,
     ``iterations``, ``seconds``, ``factor``: "complex" or "real 2n"}.  ``low_rank``: see
-    :func:`shift_defaults`.  ``options``: the scene's ``[petsc]`` table (keys without the
+    :func:`shift_defaults`; ``max_it``: SLEPc's restarts at most (what converged by then is
+    returned).  ``options``: the scene's ``[petsc]`` table (keys without the
     prefix).  Collective."""
     PETSc = import_petsc()
     SLEPc = import_slepc()
@@ -238,9 +241,9 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                        + tau.imag * sp.kron(ops.B_local, _J2, format="csr"))
             K = mat_from_local_csr(pcomm, K_local, 2 * n)
             eps.setOperators(K, B2)
-            defaults = shift_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank)
+            defaults = shift_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank, max_it=max_it)
         else:
-            defaults = complex_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank)
+            defaults = complex_defaults(2 * nev, ncv and 2 * ncv, tol, n=n, low_rank=low_rank, max_it=max_it)
         with OptionsScope(FLUTTER, defaults, {k: v for k, v in (options or {}).items() if k != "real_form"}) as scope:
             if not real_form:
                 icntl, cntl = mumps_controls(FLUTTER + "st_mat_mumps_")
