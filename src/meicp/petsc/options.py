@@ -27,6 +27,7 @@ from contextlib import contextmanager
 
 from ..core.errors import PetscOptionError, PetscSolveError
 from . import given_options, import_petsc
+from .monitor import watch
 
 log = logging.getLogger("meicp.petsc")
 
@@ -187,8 +188,10 @@ class OptionsScope:
 
     def configure(self, obj) -> None:
         """Give a PETSc/SLEPc object this scope's prefix and its options
-        (:func:`set_from_options`: a rejected value names the options the user gave)."""
+        (:func:`set_from_options`: a rejected value names the options the user gave), and an
+        EPS or SNES its progress lines (:func:`meicp.petsc.monitor.watch`)."""
         set_from_options(obj, self.prefix, self._defaults_only)
+        watch(obj, self.prefix)
 
     def __exit__(self, *exc) -> None:
         PETSc = import_petsc()
