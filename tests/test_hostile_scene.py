@@ -377,7 +377,16 @@ def test_a_lattice_whose_every_free_dof_is_a_contact_dof_is_condensed_without_so
 # meicp solve: one message, the right exit code, no traceback (concurrent processes)
 # ---------------------------------------------------------------------------------------
 
-#: (id, scene text or a path, exit code, pattern in stderr (exit 2) or stdout)
+TITLE = 'title = "two layers on a rough base"'
+#: the lower layer floating on the sliding base (top free, no load): unstable, μ_c undefined
+FLOATING = _with(t=('top = "fixed"', 'top = "free"'), l=("top_displacement = [0.06, -0.1]", ""))
+#: no divergence, decided by the window procedure (the inertia proof, then the condensation)
+BELOW_WIDE = (SCENES / "two_layers_below_mu_c.toml").read_text().replace("nx = 5", "nx = 30")
+#: write the outputs into the case's own directory, to be checked
+OUT = ["-o", "{out}"]
+
+#: (id, scene text or a path, exit code, pattern in stderr (exit 2) or stdout[, arguments
+#: instead of --no-output])
 SOLVE_CASES = [
     ("dev-zero", "/dev/zero", 2, r"meicp: error: /dev/zero: not a regular file"),
     ("invalid-utf8", TWO_LAYERS.encode().replace(b"two layers", b"two \xff layers"), 2, r"not UTF-8 text"),
@@ -400,6 +409,22 @@ SOLVE_CASES = [
     ("density-1e-300", _layer("A", "density", "1e-300"), 0,
      r"verdict +UNSTABLE\ndivergence +DIVERGENCE UNDECIDED \(search inconclusive: enumerate ended undecided\)\n"
      r"evidence .*QZ eigen-solve \(LAPACK\) did not converge(.|\n)*flutter +FLUTTER\n"),
+    # issue 30: hostile residue, each with its files written (args after the case's pattern).
+    # A long title made Matplotlib refuse the image size (10 kB: exit 3, "Image size of
+    # 124492x958 pixels is too large") or never finish the PNG (3 MB); '$' started mathtext
+    ("title-10kB", _with(t=(TITLE, 'title = "' + "x" * 10_000 + '"')), 0, r"verdict +UNSTABLE", OUT),
+    ("title-3MB", _with(t=(TITLE, 'title = "' + "x y$" * 750_000 + '"')), 0, r"scene +(x y\$){19}x y…  \(", OUT),
+    ("title-mathtext", _with(t=(TITLE, "title = 'cost $\\frac{ and $'")), 0, r"scene +cost \$\\frac\{ and \$", OUT),
+    # values PETSc accepts but the proofs cannot use: exit 3 "internal error ... No method
+    # getfactoredmatrix for PC of type jacobi"
+    ("schur-pc-jacobi", BELOW_WIDE, 2, r"meicp: error: -meicp_schur_pc_type jacobi: the condensation onto the "
+     r"contact DOFs reads a MUMPS factorisation \(pc_type cholesky or lu", ["--", "-meicp_schur_pc_type", "jacobi"]),
+    ("inertia-pc-none", BELOW_WIDE, 2, r"meicp: error: -meicp_inertia_pc_type none: the inertia proof reads a MUMPS "
+     r"factorisation", ["--", "-meicp_inertia_pc_type", "none"]),
+    # the lower layer floats: μ_c is undefined; --critical-friction exited 2 and threw the
+    # UNSTABLE verdict and its files away
+    ("critical-friction-floating", FLOATING, 0, r"verdict +UNSTABLE(.|\n)*μ_c +not determined: .*μ_c is undefined",
+     ["--critical-friction"] + OUT),
 ]
 
 
@@ -411,10 +436,13 @@ def solve_outcomes(tmp_path_factory):
         name, content = case[0], case[1]
         path = content if isinstance(content, str) and content.startswith("/dev/") else \
             str(_write(d / f"{name}.toml", content))
-        return name, run(meicp_cmd() + ["solve", path, "--no-output", "-q"], timeout=120)
+        args = [str(d / name) if a == "{out}" else a for a in (case[4] if len(case) > 4 else [])]
+        if "-o" not in args:
+            args = ["--no-output"] + args
+        return name, run(meicp_cmd() + ["solve", path, "-q"] + args, timeout=120)
 
     with ThreadPoolExecutor(max_workers=4) as pool:
-        return dict(pool.map(one, SOLVE_CASES))
+        return dict(pool.map(one, SOLVE_CASES), _dir=d)
 
 
 @pytest.mark.parametrize("name, code, pattern", [(c[0], c[2], c[3]) for c in SOLVE_CASES],
