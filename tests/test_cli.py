@@ -85,11 +85,12 @@ def test_solve_json_is_the_only_stdout_and_carries_sigma_and_mu_c(tmp_path):
         assert "enumerated" in g.attrs["evidence"]
 
 
-def test_infinite_ends_of_the_critical_friction_are_the_string_inf_in_json():
+def test_infinite_ends_of_the_critical_friction_are_null_with_a_flag_in_json():
     """A direction proved free of σ = 0 modes at every μ has lower = upper = value = inf
-    (results.h5 stores the float inf).  --json wrote null, which reads as "unknown"; the
-    string "inf" keeps the meaning and float() reads it back (solve --critical-friction with
-    a finite lower end: tests/test_hostile_api.py, solve-critical-friction-inf-json)."""
+    (results.h5 stores the float inf).  --json wrote null (read as "unknown"), then the string
+    "inf" (a string where a number belongs); now null with ``<key>_infinite: 1``, and NaN stays
+    a bare null (solve --critical-friction with a finite lower end: tests/test_hostile_api.py,
+    solve-critical-friction-inf-json)."""
     from types import SimpleNamespace
 
     from meicp.cli.solve import solve_json
@@ -99,9 +100,10 @@ def test_infinite_ends_of_the_critical_friction_are_the_string_inf_in_json():
     mu = CriticalFriction(float("inf"), float("inf"), True, "proved at every μ")
     doc = solve_json(SimpleNamespace(scene="s.toml"), meicp.load_scene(SCENES / "two_layers.toml"),
                      InstabilityResult(status="solved"), ranks=1, mu_c=mu)
-    assert doc["critical_friction"] == {"value": "inf", "found": False, "lower": "inf", "upper": "inf",
-                                        "exact": True, "evidence": "proved at every μ"}
-    assert float(doc["critical_friction"]["lower"]) == mu.lower
+    assert doc["critical_friction"] == {"value": None, "found": False, "lower": None, "upper": None,
+                                        "exact": True, "evidence": "proved at every μ", "value_infinite": 1,
+                                        "lower_infinite": 1, "upper_infinite": 1}
+    assert (doc["format"], doc["format_version"]) == ("meicp-solve", 2)
     json.dumps(doc, allow_nan=False)  # valid JSON
 
 
@@ -254,18 +256,18 @@ def test_petsc_table_entries_no_solver_read_are_reported(tmp_path):
     assert "reached no PETSc solver" not in out.stderr, out.stderr
 
 
-def test_lcp_classify_and_eicp_json_write_non_finite_numbers_as_solve_json_does():
-    # lcp --json wrote ±inf as null (read as "unknown"); solve --json writes "inf"/"-inf"
-    # (float() reads them back) and NaN as null: one convention through json_number
-    import json
-
+def test_every_json_document_writes_numbers_as_numbers():
+    # lcp --json wrote ±inf as null (read as "unknown"), solve --json as the strings "inf"/"-inf";
+    # now one convention for every document (meicp.core.json_values): a number or null, an
+    # infinite one flagged by its sign in <key>_infinite (a list's flag: a list of signs)
     import numpy as np
 
-    from meicp.cli.lcp import _vector, json_plain
+    from meicp.core.json_values import json_ready
 
-    assert _vector(np.array([1.0, np.inf, -np.inf, np.nan])) == [1.0, "inf", "-inf", None]
-    doc = json_plain({"scale": np.float64(np.inf), "game": {"value": -np.inf, "x": (np.nan, 2)},
-                      "flag": np.bool_(True), "n": np.int64(3), "timings": {"t": 0.5}})
-    assert doc == {"scale": "inf", "game": {"value": "-inf", "x": [None, 2]}, "flag": True, "n": 3,
-                   "timings": {"t": 0.5}}
+    doc = json_ready({"scale": np.float64(np.inf), "game": {"value": -np.inf, "x": (np.nan, 2)},
+                      "window": [0.0, np.inf], "flag": np.bool_(True), "n": np.int64(3), "timings": {"t": 0.5},
+                      "x": np.array([1.0, -np.inf])})
+    assert doc == {"scale": None, "scale_infinite": 1, "game": {"value": None, "value_infinite": -1, "x": [None, 2]},
+                   "window": [0.0, None], "window_infinite": [0, 1], "flag": True, "n": 3, "timings": {"t": 0.5},
+                   "x": [1.0, None], "x_infinite": [0, -1]}
     assert json.loads(json.dumps(doc, allow_nan=False)) == doc  # valid JSON, no Infinity/NaN tokens

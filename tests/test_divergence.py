@@ -116,8 +116,9 @@ def test_without_a_certified_window_the_condensed_proof_covers_every_sigma():
     assert v.stable is True and v.proof.test == "condensed-windows"
     assert v.proof.sigma_window == (0.0, math.inf) and v.evidence == v.proof.statement
     assert v.evidence.startswith("G(σ) ∈ R₀ on every window of [0, inf] (")
-    # JSON (and results.h5): was [0.0, null]
-    assert InstabilityResult(proofs=[v.proof]).to_dict()["proofs"][0]["sigma_window"] == [0.0, "inf"]
+    # JSON (and results.h5): was [0.0, null] (unknown), then [0.0, "inf"]; now flagged (issue 30)
+    proof = InstabilityResult(proofs=[v.proof]).to_dict()["proofs"][0]
+    assert proof["sigma_window"] == [0.0, None] and proof["sigma_window_infinite"] == [0, 1]
     v = _verdict(_scene(60, (2, 2), "slip-", 3.0), estimate_top=_stalled)
     assert v.stable is not True
 

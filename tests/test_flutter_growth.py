@@ -111,4 +111,4 @@ def test_search_result_rows_say_fastest_found(monkeypatch):
     assert r.flutter is True and not r.flutter_growth.exact
     assert "not proved the fastest" in rows["flutter growth"]
     assert "fastest found first, not proved the fastest" in rows["flutter modes"]
-    assert r.to_dict()["flutter_growth"]["upper"] is None
+    assert r.to_dict()["flutter_growth"]["upper"] is None and r.to_dict()["flutter_growth"]["upper_infinite"] == 1

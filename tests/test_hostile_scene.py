@@ -377,7 +377,16 @@ def test_a_lattice_whose_every_free_dof_is_a_contact_dof_is_condensed_without_so
 # meicp solve: one message, the right exit code, no traceback (concurrent processes)
 # ---------------------------------------------------------------------------------------
 
-#: (id, scene text or a path, exit code, pattern in stderr (exit 2) or stdout)
+TITLE = 'title = "two layers on a rough base"'
+#: the lower layer floating on the sliding base (top free, no load): unstable, μ_c undefined
+FLOATING = _with(t=('top = "fixed"', 'top = "free"'), l=("top_displacement = [0.06, -0.1]", ""))
+#: no divergence, decided by the window procedure (the inertia proof, then the condensation)
+BELOW_WIDE = (SCENES / "two_layers_below_mu_c.toml").read_text().replace("nx = 5", "nx = 30")
+#: write the outputs into the case's own directory, to be checked
+OUT = ["-o", "{out}"]
+
+#: (id, scene text or a path, exit code, pattern in stderr (exit 2) or stdout[, arguments
+#: instead of --no-output])
 SOLVE_CASES = [
     ("dev-zero", "/dev/zero", 2, r"meicp: error: /dev/zero: not a regular file"),
     ("invalid-utf8", TWO_LAYERS.encode().replace(b"two layers", b"two \xff layers"), 2, r"not UTF-8 text"),
@@ -400,6 +409,22 @@ SOLVE_CASES = [
     ("density-1e-300", _layer("A", "density", "1e-300"), 0,
      r"verdict +UNSTABLE\ndivergence +DIVERGENCE UNDECIDED \(search inconclusive: enumerate ended undecided\)\n"
      r"evidence .*QZ eigen-solve \(LAPACK\) did not converge(.|\n)*flutter +FLUTTER\n"),
+    # issue 30: hostile residue, each with its files written (args after the case's pattern).
+    # A long title made Matplotlib refuse the image size (10 kB: exit 3, "Image size of
+    # 124492x958 pixels is too large") or never finish the PNG (3 MB); '$' started mathtext
+    ("title-10kB", _with(t=(TITLE, 'title = "' + "x" * 10_000 + '"')), 0, r"verdict +UNSTABLE", OUT),
+    ("title-3MB", _with(t=(TITLE, 'title = "' + "x y$" * 750_000 + '"')), 0, r"scene +(x y\$){19}x y…  \(", OUT),
+    ("title-mathtext", _with(t=(TITLE, "title = 'cost $\\frac{ and $'")), 0, r"scene +cost \$\\frac\{ and \$", OUT),
+    # values PETSc accepts but the proofs cannot use: exit 3 "internal error ... No method
+    # getfactoredmatrix for PC of type jacobi"
+    ("schur-pc-jacobi", BELOW_WIDE, 2, r"meicp: error: -meicp_schur_pc_type jacobi: the condensation onto the "
+     r"contact DOFs reads a MUMPS factorisation \(pc_type cholesky or lu", ["--", "-meicp_schur_pc_type", "jacobi"]),
+    ("inertia-pc-none", BELOW_WIDE, 2, r"meicp: error: -meicp_inertia_pc_type none: the inertia proof reads a MUMPS "
+     r"factorisation", ["--", "-meicp_inertia_pc_type", "none"]),
+    # the lower layer floats: μ_c is undefined; --critical-friction exited 2 and threw the
+    # UNSTABLE verdict and its files away
+    ("critical-friction-floating", FLOATING, 0, r"verdict +UNSTABLE(.|\n)*μ_c +not determined: .*μ_c is undefined",
+     ["--critical-friction"] + OUT),
 ]
 
 
@@ -411,10 +436,13 @@ def solve_outcomes(tmp_path_factory):
         name, content = case[0], case[1]
         path = content if isinstance(content, str) and content.startswith("/dev/") else \
             str(_write(d / f"{name}.toml", content))
-        return name, run(meicp_cmd() + ["solve", path, "--no-output", "-q"], timeout=120)
+        args = [str(d / name) if a == "{out}" else a for a in (case[4] if len(case) > 4 else [])]
+        if "-o" not in args:
+            args = ["--no-output"] + args
+        return name, run(meicp_cmd() + ["solve", path, "-q"] + args, timeout=120)
 
     with ThreadPoolExecutor(max_workers=4) as pool:
-        return dict(pool.map(one, SOLVE_CASES))
+        return dict(pool.map(one, SOLVE_CASES), _dir=d)
 
 
 @pytest.mark.parametrize("name, code, pattern", [(c[0], c[2], c[3]) for c in SOLVE_CASES],
@@ -426,3 +454,42 @@ def test_solve_on_hostile_scenes(solve_outcomes, name, code, pattern):
     assert re.search(pattern, out.stderr if code == 2 else out.stdout), (out.stdout, out.stderr)
     if code == 2:
         assert [line.startswith("meicp: error:") for line in out.stderr.splitlines()] == [True], out.stderr
+    case = next(c for c in SOLVE_CASES if c[0] == name)
+    if OUT[1] in (case[4] if len(case) > 4 else []):  # the verdict's files, whole, whatever the extras did
+        written = {p.name for p in (solve_outcomes["_dir"] / name).iterdir()}
+        assert written == {"results.h5", "lattice.h5", "lattice.xdmf", "mode.png", "flutter_mode.png",
+                           "contacts.png"}, written
+
+
+def test_an_enumeration_holds_at_most_its_stack_budget(monkeypatch):
+    """A forced enumeration of 17 pairs on 85 retained DOFs held 5.8 GB for 352 s: each stack
+    held up to 20,000 supports whatever their order, at about 8 order² doubles each (0.9 GB per
+    array at order 76).  A stack now fits STACK_BYTES (256 MiB; here lowered to 1 MiB), as
+    tracemalloc measures — and the same enumeration with stacks of 20,000 goes far past it."""
+    import tracemalloc
+
+    from meicp.eicp import enumeration as eicp_enumeration
+
+    # the shipped budget at the order of the reported case: 580 supports per stack, 256 MiB
+    assert eicp_enumeration.stack_size(76) * eicp_enumeration.STACK_ARRAYS * 8 * 76 ** 2 <= 256 * 2 ** 20
+    rng = np.random.default_rng(3)
+    n, pairs = 40, 10
+    K = rng.standard_normal((n, n))
+    A, B = -(K @ K.T + n * np.eye(n)), np.diag(rng.uniform(1.0, 2.0, n))
+    J = np.arange(n - pairs, n)
+
+    def peak(stack_bytes):
+        monkeypatch.setattr(eicp_enumeration, "STACK_BYTES", stack_bytes)
+        tracemalloc.start()
+        try:
+            r = meicp.solve_eicp(A, B, J=J, method="enumerate", lam_min=0.0)
+            return tracemalloc.get_traced_memory()[1], r
+        finally:
+            tracemalloc.stop()
+
+    budget = 2 ** 20
+    bounded, r = peak(budget)
+    unbounded, r0 = peak(2 ** 40)
+    assert r.status == r0.status == "no_solution" and r.coverage["supports"] == 2 ** pairs
+    assert bounded < 2 * budget + 8 * n * n * 8, bounded  # the stack, the pencil's own copies
+    assert unbounded > 10 * budget, unbounded

@@ -359,12 +359,12 @@ def test_bad_result_writes_nothing(tmp_path, two_layers, breakage):
 
 
 def test_failure_half_way_leaves_nothing(tmp_path, two_layers, monkeypatch):
-    import meicp.plotting.lattice as plotting
+    import meicp.io.results as results
 
     def broken(*args, **kwargs):
         raise RuntimeError("disk full (simulated)")
 
-    monkeypatch.setattr(plotting, "plot_contacts", broken)  # after both HDF5 files and mode.png
+    monkeypatch.setattr(results, "write_lattice", broken)  # after results.h5
     out = tmp_path / "fresh" / "run"
     with pytest.raises(RuntimeError, match="simulated"):
         write_results(out, two_layers, unstable_result(two_layers))
@@ -378,6 +378,25 @@ def test_failure_half_way_leaves_nothing(tmp_path, two_layers, monkeypatch):
         write_results(old, two_layers, unstable_result(two_layers))
     assert {p.name for p in old.iterdir()} == {"results.h5", "notes.txt"}
     assert (old / "results.h5").read_bytes() == b"earlier run"
+
+
+def test_a_picture_that_cannot_be_drawn_leaves_the_results_whole(tmp_path, two_layers, monkeypatch, caplog):
+    """A PNG is an extra (issue 30): Matplotlib refusing one (a huge title asked for an image
+    of 124,492 pixels) threw the verdict's files away; now the others are written, the PNG
+    is left out with a warning, and a stale one of an earlier run is removed."""
+    import meicp.plotting.lattice as plotting
+
+    def broken(*args, **kwargs):
+        raise ValueError("Image size of 124492x958 pixels is too large (simulated)")
+
+    out = tmp_path / "run"
+    write_results(out, two_layers, unstable_result(two_layers))
+    assert (out / FILES["contacts_png"]).is_file()
+    monkeypatch.setattr(plotting, "plot_contacts", broken)
+    files = write_results(out, two_layers, unstable_result(two_layers))
+    assert "contacts_png" not in files and {"results", "lattice", "xdmf", "mode_png"} <= set(files)
+    assert {p.name for p in out.iterdir()} == {FILES[k] for k in ("results", "lattice", "xdmf", "mode_png")}
+    assert "contacts.png not written: ValueError: Image size of 124492x958" in caplog.text
 
 
 def test_output_path_that_is_a_file(tmp_path, two_layers):

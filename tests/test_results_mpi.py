@@ -65,12 +65,13 @@ def test_bad_result_raises_on_every_rank(comm, shared_dir):
 
 
 def test_failure_on_rank0_reaches_every_rank(comm, shared_dir, monkeypatch):
-    import meicp.plotting.lattice as plotting
+    import meicp.io.results as results
 
     def broken(*args, **kwargs):
         raise RuntimeError("disk full (simulated)")
 
-    monkeypatch.setattr(plotting, "plot_mode", broken)
+    # lattice.h5's writer, after results.h5 (a picture is an extra: its failure is a warning)
+    monkeypatch.setattr(results, "write_lattice", broken)
     scene = load_scene(SCENES / "two_layers.toml")
     with pytest.raises((RuntimeError, MeicpError), match="simulated"):
         write_results(shared_dir / "half", scene, unstable_result(scene), comm=comm)

@@ -1,8 +1,7 @@
-"""``meicp eicp FILE``: an (M)EiCP from HDF5 or ``.mat`` (datasets ``A``, ``B``, optional ``J``)."""
+"""``meicp eicp FILE``: an (M)EiCP from HDF5 or ``.mat`` (datasets ``A``, ``B``, optional ``J``);
+``--json``: one document of format ``meicp-eicp`` (:mod:`meicp.cli.output`)."""
 
 from __future__ import annotations
-
-import json
 
 import numpy as np
 
@@ -11,7 +10,7 @@ from ..eicp.solve import available_methods, solve_eicp
 from ..io.problem_files import read_problem
 from .arguments import cli_spelling, finite, tolerance, verbosity
 from .exit import Exit
-from .lcp import json_plain
+from .output import json_header, print_json
 
 
 def register(sub) -> None:
@@ -36,13 +35,12 @@ def run(args) -> int:
     r = solve_eicp(data["A"], data["B"], J=J, method=args.method, all_solutions=args.all,
                    lam_min=args.lam_min, tol=args.tol, comm=MPI.COMM_WORLD, **kwargs)
     if args.json:
-        rank0_print(json.dumps({
-            "file": args.file, "method": r.method, "status": r.status, "success": r.success,
-            "message": cli_spelling(r.message), "iterations": r.iterations, "timings": json_plain(r.timings),
-            "solutions": [json_plain({"lam": s.lam, "residual": s.residual, "support": s.support.tolist(),
-                                      "x": s.x.tolist()}) for s in r.solutions],
-            "attempts": [[name, status, cli_spelling(message)] for name, status, message in r.attempts]},
-            indent=2))
+        print_json({**json_header("eicp"),
+                    "file": args.file, "method": r.method, "status": r.status, "success": r.success,
+                    "message": cli_spelling(r.message), "iterations": r.iterations, "timings": r.timings,
+                    "solutions": [{"lam": s.lam, "residual": s.residual, "support": s.support, "x": s.x}
+                                  for s in r.solutions],
+                    "attempts": [[name, status, cli_spelling(message)] for name, status, message in r.attempts]})
         return Exit.OK if r.success or r.status == "no_solution" else Exit.FAILED
     n = np.shape(data["A"])[0]
     rank0_print(f"EiCP from {args.file}: n = {n}, |J| = {n if J is None else J.size}")

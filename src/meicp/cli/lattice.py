@@ -1,6 +1,7 @@
 """``meicp lattice SCENE.toml -o DIR``: build the scene's lattice, assemble K and M on all
 ranks, and write ``DIR/NAME.h5`` + ``DIR/NAME.xdmf`` (open the .xdmf in ParaView) and
-``DIR/NAME.png``."""
+``DIR/NAME.png``; ``--json``: one document of format ``meicp-lattice`` with the sizes and the
+files (:mod:`meicp.cli.output`)."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from ..petsc.stages import stage
 from ..plotting.lattice import plot_lattice
 from .arguments import output_directory, verbosity
 from .exit import Exit
+from .output import json_header, print_json
 
 
 def register(sub) -> None:
@@ -32,6 +34,8 @@ def register(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="skip the PNG")
     p.add_argument("--no-assemble", action="store_true",
                    help="skip K and M (geometry, bonds and materials only)")
+    p.add_argument("--json", action="store_true",
+                   help="one JSON document (format meicp-lattice): sizes, nonzeros and the files written")
     verbosity(p)
     p.set_defaults(run=run)
 
@@ -62,7 +66,10 @@ def run(args) -> int:
     if not stem or "/" in stem:
         raise ProblemError(f"--name {stem!r} must be a plain file name stem")
     _make_dir(comm, out)
-    rank0_print(model.describe())
+    say = (lambda *a: None) if args.json else rank0_print
+    say(model.describe())
+    doc = {**json_header("lattice"), "scene": str(args.scene), "nx": model.nx, "ny": model.ny,
+           "dofs": model.n_dofs, "ranks": comm.Get_size(), "total_mass": model.total_mass(), "K": None}
 
     fields, matrices = {}, ()
     if not args.no_assemble:
@@ -74,24 +81,30 @@ def run(args) -> int:
         dt = time.perf_counter() - t0
         K = matrices[0]
         nz = nonzeros(K)
-        rank0_print(f"K: {model.n_dofs} x {model.n_dofs}, {nz['nz_used']:,} nonzeros "
+        doc["K"] = {"nonzeros": nz["nz_used"], "preallocated": nz["nz_allocated"], "mallocs": nz["mallocs"],
+                    "seconds": dt}
+        say(f"K: {model.n_dofs} x {model.n_dofs}, {nz['nz_used']:,} nonzeros "
                     f"(preallocated {nz['nz_allocated']:,}, mallocs {nz['mallocs']}); "
                     f"M: lumped, total mass {model.total_mass():.6g}; assembled in {dt:.3f} s "
                     f"on {comm.Get_size()} rank(s)")
         fields["K_diagonal"] = diagonal(K)
     with destroying(*fields.values(), *matrices), stage("write"):
         files = write_lattice(out / f"{stem}.h5", model, fields=fields, comm=comm)
-    rank0_print(f"wrote {files.h5}")
-    rank0_print(f"wrote {files.xdmf}  (open it in ParaView)")
+    say(f"wrote {files.h5}")
+    say(f"wrote {files.xdmf}  (open it in ParaView)")
+    doc["files"] = {"h5": str(files.h5), "xdmf": str(files.xdmf), "png": None}
     if not args.no_plot:
         error = None
         if comm.Get_rank() == 0:
             try:
                 png = plot_lattice(model, out / f"{stem}.png")
-                rank0_print(f"wrote {png}")
+                doc["files"]["png"] = str(png)
+                say(f"wrote {png}")
             except ProblemError as exc:
                 error = str(exc)
         error = comm.bcast(error, root=0)
         if error:
             raise ProblemError(error)
+    if args.json:
+        print_json(doc)
     return Exit.OK

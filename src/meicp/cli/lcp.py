@@ -1,18 +1,18 @@
-"""``meicp lcp FILE`` and ``meicp classify FILE``: Siconos ``.dat`` or HDF5 (``M``, ``q``)."""
+"""``meicp lcp FILE`` and ``meicp classify FILE``: Siconos ``.dat`` or HDF5 (``M``, ``q``).
+``--json``: one document (:mod:`meicp.cli.output`), formats ``meicp-lcp`` and
+``meicp-classify``."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 
-from ..contact.result import json_number
 from ..core.log import rank0_print
 from ..io.problem_files import read_problem
 from ..lcp.classes import MAX_EXACT_LIMIT, classify
 from ..lcp.solve import available_methods, solve_lcp
 from .arguments import integer, tolerance, verbosity
 from .exit import Exit
+from .output import json_header, print_json
 
 
 def register(sub) -> None:
@@ -34,42 +34,17 @@ def register(sub) -> None:
     p.set_defaults(run=run_classify)
 
 
-def _vector(x):
-    """A vector for JSON as ``meicp solve --json`` writes numbers (:func:`json_number`): ±inf as
-    "inf"/"-inf", NaN (unknown) as None."""
-    return None if x is None else [json_number(v) for v in x]
-
-
-def json_plain(v):
-    """A JSON-ready value with every float through :func:`json_number` (``json.dumps``
-    would write NaN/Infinity, which is not JSON); dicts, lists and tuples walked."""
-    if isinstance(v, dict):
-        return {k: json_plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [json_plain(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return json_plain(v.tolist())
-    if isinstance(v, (bool, np.bool_)):
-        return bool(v)
-    if isinstance(v, (int, np.integer)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        return json_number(v)
-    return v
-
-
 def run_lcp(args) -> int:
     data = read_problem(args.file)
     method = "enumerate" if args.all else args.method
     r = solve_lcp(data["M"], data["q"], method=method, tol=args.tol)
     if args.json:
-        rank0_print(json.dumps({
-            "file": args.file, "n": int(np.size(data["q"])), "method": r.method, "status": r.status,
-            "success": r.success, "message": r.message, "iterations": r.iterations,
-            "residual": json_number(r.residual), "min_x": json_number(r.min_x), "min_w": json_number(r.min_w),
-            "complementarity": json_number(r.complementarity), "x": _vector(r.x), "w": _vector(r.w),
-            "solutions": [_vector(s) for s in r.solutions], "attempts": r.attempts,
-            "timings": json_plain(r.timings)}, indent=2))
+        print_json({**json_header("lcp"),
+                    "file": args.file, "n": int(np.size(data["q"])), "method": r.method, "status": r.status,
+                    "success": r.success, "message": r.message, "iterations": r.iterations,
+                    "residual": r.residual, "min_x": r.min_x, "min_w": r.min_w,
+                    "complementarity": r.complementarity, "x": r.x, "w": r.w,
+                    "solutions": list(r.solutions), "attempts": r.attempts, "timings": r.timings})
     else:
         rank0_print(f"LCP from {args.file}: n = {np.size(data['q'])}")
         for name, status, message in (r.attempts if len(r.attempts) > 1 else []):
@@ -86,5 +61,8 @@ def run_lcp(args) -> int:
 def run_classify(args) -> int:
     data = read_problem(args.file, names=("M",))
     c = classify(data["M"], exact_limit=args.exact_limit)
-    rank0_print(json.dumps(json_plain(c.to_dict()), indent=2, default=float) if args.json else c.report())
+    if args.json:
+        print_json({**json_header("classify"), "file": args.file, **c.to_dict()})
+    else:
+        rank0_print(c.report())
     return Exit.OK

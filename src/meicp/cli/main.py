@@ -27,6 +27,7 @@ from ..petsc.options import PREFIXES, report_unused_options
 from . import eicp, info, lattice, lcp, solve, sweep
 from .arguments import Parser, verbosity_of
 from .exit import MEANING, Exit
+from .output import stdout_for_json
 from .signals import interrupted, interrupts_end_the_run, wait_for_the_end
 
 #: the subcommands, each a module with ``register(subparsers)``, in the order of ``--help``
@@ -82,6 +83,11 @@ def _all_ranks_failed() -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``meicp`` with ``argv`` (default: the command line) and return its exit code.
+    Under ``--json`` descriptor 1 stays on stderr after the run when ``argv`` is None (the
+    program: PETSc prints ``-log_view`` as it finalizes) and is given back otherwise
+    (:func:`meicp.cli.output.stdout_for_json`)."""
+    program = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
     own, petsc_args = _split_petsc_args(argv)
     args = build_parser().parse_args(own)
@@ -89,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     vars(args).pop("verbose_after", None)
     configure_logging(-1 if args.quiet else args.verbose)
     init(petsc_args)
-    with interrupts_end_the_run():
+    with stdout_for_json(getattr(args, "json", False), restore=not program), interrupts_end_the_run():
         return _run(args)
 
 

@@ -10,43 +10,52 @@ without contact gets its modal analysis), prints a summary (stdout, rank 0) and 
 skips the flutter analysis of steady sliding (docs/flutter.md): the divergence verdict
 alone, and the overall verdict cannot be STABLE.
 
-``--json``: instead of the summary, one JSON document on stdout (nothing else goes there;
-:func:`solve_json`): the verdict, the modes with σ and support, μ_c when asked, the
-output paths, timings and versions.  PETSc's own ``-log_view`` also prints to stdout: send
-it to a file (``-- -log_view :log.txt``).
+``--json``: instead of the summary, one JSON document on stdout (:func:`solve_json`): the
+verdict, the modes with σ and support, μ_c when asked, the output paths, timings and
+versions.  Nothing else goes there, whatever PETSc or MUMPS options print (they go to
+stderr: :mod:`meicp.cli.output`).
+
+``--critical-friction`` is an extra: when μ_c cannot be determined (a floating layer, where
+it is undefined; a solver that fails) the verdict, its files and its JSON stand, the reason
+is a warning on stderr, the ``μ_c`` row of the summary and ``critical_friction.error`` in
+the JSON and in results.h5, and the exit code is the verdict's.
 
 Progress goes to stderr through the ``meicp`` logger, each line stamped with the seconds
-since the start of the run: the phases of this command and of the analysis are shown by
-default (INFO), ``-q`` shows warnings only, ``-vv`` adds debug output.
+since the start of the run: an estimate of the run's memory and time from the size model
+(:func:`meicp.lattice.size.typical_cost`), then the phases of this command and of the
+analysis, shown by default (INFO), and within a long phase a line every few seconds
+(:mod:`meicp.core.progress`); ``-q`` shows warnings only, ``-vv`` adds debug output.
 
 Exit codes: 0 the analysis answered (stable, unstable, undecided with ``success``, or a
 modal analysis) — unstable also when a certified flutter mode decides it while the
 divergence search was inconclusive (the divergence row says so); 1 it failed
-(``result.success`` is False: nothing decided the verdict, or a solver raised; or μ_c was
-asked for and not determined), 2 bad input.
+(``result.success`` is False: nothing decided the verdict, or a solver raised), 2 bad input.
 """
 
 from __future__ import annotations
 
-import json
+import dataclasses
 import logging
 import os
 import time
 from pathlib import Path
 
-from .._version import __version__
 from ..contact.critical_friction import critical_friction
 from ..contact.instability import analyze
 from ..contact.modal import has_contact
-from ..contact.result import finite_or_none, json_number, seconds
-from ..core.errors import ConvergenceError, ProblemError
+from ..contact.problem import needs_static
+from ..contact.result import seconds
+from ..core.errors import MeicpError, ProblemError
+from ..core.json_values import json_ready
 from ..core.log import configure_logging, rank0_print
 from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
+from ..lattice.size import typical_cost
 from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
 from .arguments import cli_spelling, finite, integer, output_directory, verbosity, verbosity_of
 from .exit import Exit
+from .output import json_header, print_json
 
 #: what ``--method`` may choose: the MEiCP methods :func:`analyze` decides with
 METHODS = ("auto", "enumerate", "active-set")
@@ -135,7 +144,10 @@ def _check_output_dir(out: Path) -> None:
 
 def summary_rows(scene, result, *, ranks: int = 1) -> list[tuple[str, str]]:
     """The (key, text) rows of the summary (:meth:`InstabilityResult.summary_rows`), its
-    messages' keyword hints spelt as this command's flags (--method enumerate)."""
+    messages' keyword hints spelt as this command's flags (--method enumerate), the scene's
+    title on one line of at most 80 characters (results.h5 keeps it whole)."""
+    if scene.title != _shortened(scene.title):
+        scene = dataclasses.replace(scene, title=_shortened(scene.title))
     return [(key, cli_spelling(text)) for key, text in result.summary_rows(scene, ranks=ranks)]
 
 
@@ -151,14 +163,16 @@ def overrides(args) -> dict:
 
 def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=None, out=None,
                mu_c_error: str | None = None) -> dict:
-    """The document ``meicp solve --json`` prints: the run (meicp version, scene, ranks, the
-    command line's overrides), the result keyed like its attributes
-    (:meth:`InstabilityResult.to_dict`; messages with this command's flags), the critical
-    friction (None when not asked; ``value``, ``lower``, ``upper`` numbers, or the string
-    ``"inf"`` for an infinite end where results.h5 stores the float inf: ``value`` "inf" when
-    no σ = 0 mode was found, ``lower`` "inf" when none exists at any μ), the output files,
-    the wall-clock timings of this command and the versions of the stack."""
-    doc = {"format": "meicp-solve", "format_version": 1, "meicp_version": __version__,
+    """The document ``meicp solve --json`` prints, JSON-ready: the header
+    (:func:`~meicp.cli.output.json_header`), the run (scene, ranks, the command line's
+    overrides), the result keyed like its attributes (:meth:`InstabilityResult.to_dict`;
+    messages with this command's flags), the critical friction (None when not asked;
+    ``{"error": why}`` when it failed; else ``value``, ``found``, ``lower``, ``upper``,
+    ``exact``, ``evidence``, an infinite end as ``null`` with ``<key>_infinite: 1`` where
+    results.h5 stores the float inf: ``value`` when no σ = 0 mode was found, ``lower`` too
+    when none exists at any μ), the output files, the wall-clock timings of this command and
+    the versions of the stack."""
+    doc = {**json_header("solve"),
            "scene": {"path": str(args.scene), "title": scene.title, "nx": scene.nx, "ny": scene.ny,
                      "dofs": scene.n_dofs},
            "ranks": ranks, "overrides": overrides(args)}
@@ -168,14 +182,12 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
     doc.update(data)
     if mu_c is None:
         doc["critical_friction"] = None if mu_c_error is None else {"error": mu_c_error}
-    else:
-        record = critical_friction_record(mu_c)
-        # an infinite end keeps its meaning ("inf": no mode found / none at any μ), as in results.h5
-        doc["critical_friction"] = {k: json_number(v) if isinstance(v, float) else v for k, v in record.items()}
+    else:  # an infinite end keeps its meaning (no mode found / none at any μ) through its flag
+        doc["critical_friction"] = critical_friction_record(mu_c)
     doc["output"] = None if out is None else {"directory": str(out), **{k: str(v) for k, v in (files or {}).items()}}
-    doc["wall"] = {k: finite_or_none(v) for k, v in (wall or {}).items()}
+    doc["wall"] = dict(wall or {})
     doc["versions"] = versions()
-    return doc
+    return json_ready(doc)
 
 
 def format_rows(rows) -> str:
@@ -207,8 +219,9 @@ def _run(args, comm, t0) -> int:
     if not args.no_output:
         out = Path(args.output) if args.output else Path("out") / Path(args.scene).stem
         _check_output_dir(out)
-    log.info(f"scene: {scene.title or Path(args.scene).stem}, {scene.nx} × {scene.ny} nodes, "
+    log.info(f"scene: {_shortened(scene.title) or Path(args.scene).stem}, {scene.nx} × {scene.ny} nodes, "
              f"{scene.n_dofs:,} DOFs, {comm.Get_size()} rank(s)")
+    log.info(typical_cost(scene, comm.Get_size(), static=needs_static(scene)).describe())
     wall["load"] = time.perf_counter() - t0
 
     log.info("analysis: started")
@@ -231,9 +244,10 @@ def _run(args, comm, t0) -> int:
         try:
             with stage("critical_friction"):
                 mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
-        except ConvergenceError as exc:  # the analysis is done: keep it, say μ_c failed, exit 1
-            mu_c_failed = str(exc)
-            rows.append(("μ_c", f"not determined: {exc}"))
+        except MeicpError as exc:  # an extra: the verdict is done and stands, with its files and exit code
+            mu_c_failed = cli_spelling(str(exc))
+            log.warning(f"μ_c not determined: {mu_c_failed}")
+            rows.append(("μ_c", f"not determined: {mu_c_failed}"))
         else:
             rows.append(("μ_c", mu_c.describe()))
             rows.append(("", f"  {mu_c.evidence}"))
@@ -242,7 +256,7 @@ def _run(args, comm, t0) -> int:
         log.info(f"writing results to {out}/")
         t2 = time.perf_counter()
         try:
-            record = None if mu_c is None else critical_friction_record(mu_c)
+            record = {"error": mu_c_failed} if mu_c_failed else None if mu_c is None else critical_friction_record(mu_c)
             files = write_results(out, scene, result, comm=comm, scene_text=scene_text, critical_friction=record,
                                   overrides=overrides(args))
         except BaseException:
@@ -259,13 +273,19 @@ def _run(args, comm, t0) -> int:
     if args.json:
         doc = solve_json(args, scene, result, ranks=comm.Get_size(), mu_c=mu_c, files=files, wall=wall, out=out,
                          mu_c_error=mu_c_failed)
-        rank0_print(json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False))
+        print_json(doc)
     else:
         rank0_print(format_rows(rows))
     # every rank leaves together: mpirun aborts the job as soon as one rank exits non-zero,
     # which could cut rank 0's summary short after a failed (exit 1) analysis
     comm.Barrier()
-    return Exit.OK if result.success and mu_c_failed is None else Exit.FAILED
+    return Exit.OK if result.success else Exit.FAILED
+
+
+def _shortened(text: str, limit: int = 80) -> str:
+    """A scene's title on one progress line: a 3 MB title is legal in a scene file."""
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
 _DESCRIBE = {"results": "scene, versions, states, forces, modes, certificates, timings",

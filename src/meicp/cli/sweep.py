@@ -18,7 +18,6 @@ bad key, range or value is refused before any analysis.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..contact.result import seconds
@@ -29,6 +28,7 @@ from ..io.scene import load_scene
 from ..study.parameters import PARAMETER_HELP, parse_values
 from ..study.driver import PER_POINT, sweep
 from .arguments import cli_spelling, output_directory, verbosity, verbosity_of
+from .output import json_header, print_json
 from .exit import Exit
 from .solve import METHODS
 
@@ -93,7 +93,7 @@ def run(args) -> int:
     except ProblemError as exc:
         raise ProblemError(cli_spelling(str(exc))) from None
     if args.json:
-        rank0_print(json.dumps(result.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
+        print_json({**json_header("sweep"), **result.to_dict()})
     else:
         rank0_print(table(result))
     comm.Barrier()

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.json_values import json_ready
 from .result import growth_frequency
 
 #: the bracket is exact when upper − lower ≤ EXACT_WIDTH·upper (issue 29)
@@ -83,8 +84,11 @@ class FlutterGrowth:
         return f"≥ {self.lower:.6g} ({found}, not proved the fastest; {bound})"
 
     def to_dict(self) -> dict:
-        return {"lower": float(self.lower), "upper": None if self.upper is None else float(self.upper),
-                "exact": self.exact, "evidence": self.evidence}
+        """JSON-ready: no upper bound proved is an infinite ``upper`` — ``null`` with
+        ``upper_infinite: 1`` (:mod:`meicp.core.json_values`)."""
+        upper = math.inf if self.upper is None else float(self.upper)
+        return json_ready({"lower": float(self.lower), "upper": upper, "exact": self.exact,
+                           "evidence": self.evidence})
 
 
 def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, modes: list,

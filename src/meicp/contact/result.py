@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.json_values import json_ready
 from ..core.results import Result, brief
 from ..scene import STATES
 
@@ -59,12 +60,11 @@ class Mode:
         return float(np.sqrt(max(-self.sigma, 0.0)))
 
     def to_dict(self) -> dict:
-        """Everything but the shape ``x``, as JSON-ready values (NaN and ±inf as None)."""
-        return {"sigma": finite_or_none(self.sigma), "growth_rate": finite_or_none(self.growth_rate),
-                "frequency": finite_or_none(self.frequency), "residual": finite_or_none(self.residual),
-                "support": [int(i) for i in np.ravel(self.support)],
-                "interface_support": {str(k): [int(i) for i in np.ravel(v)]
-                                      for k, v in self.interface_support.items()}}
+        """Everything but the shape ``x``, as JSON-ready values (numbers as
+        :mod:`meicp.core.json_values` writes them)."""
+        return json_ready({"sigma": self.sigma, "growth_rate": self.growth_rate, "frequency": self.frequency,
+                           "residual": self.residual, "support": np.ravel(self.support),
+                           "interface_support": {k: np.ravel(v) for k, v in self.interface_support.items()}})
 
 
 @dataclass
@@ -106,14 +106,13 @@ class FlutterMode:
         return growth_frequency(self.sigma)[1]
 
     def to_dict(self) -> dict:
-        """Everything but the shape ``x``, as JSON-ready values."""
-        return {"sigma_real": finite_or_none(self.sigma.real), "sigma_imag": finite_or_none(self.sigma.imag),
-                "growth_rate": finite_or_none(self.growth_rate), "frequency": finite_or_none(self.frequency),
-                "residual": finite_or_none(self.residual), "radius": finite_or_none(self.radius),
-                "support": [int(i) for i in np.ravel(self.support)],
-                "interface_support": {str(k): [int(i) for i in np.ravel(v)]
-                                      for k, v in self.interface_support.items()},
-                "branch": self.branch, "found_by": self.found_by}
+        """Everything but the shape ``x``, as JSON-ready values (numbers as
+        :mod:`meicp.core.json_values` writes them)."""
+        return json_ready({"sigma_real": self.sigma.real, "sigma_imag": self.sigma.imag,
+                           "growth_rate": self.growth_rate, "frequency": self.frequency, "residual": self.residual,
+                           "radius": self.radius, "support": np.ravel(self.support),
+                           "interface_support": {k: np.ravel(v) for k, v in self.interface_support.items()},
+                           "branch": self.branch, "found_by": self.found_by})
 
 
 def growth_frequency(sigma) -> tuple[float, float]:
@@ -263,7 +262,8 @@ class InstabilityResult(Result):
         analysis, verdict, stable, divergence, flutter, status, success, message, evidence,
         divergence_failure (None, or why the divergence search was inconclusive), flutter_evidence,
         flutter_growth (``{lower, upper, exact, evidence}``, upper None when unbounded),
-        proofs (an infinite σ-window end as the string "inf": :func:`json_number`), modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
+        proofs (a σ-window [0, ∞) as ``[0.0, null]`` with ``sigma_window_infinite: [0, 1]``:
+        :mod:`meicp.core.json_values`), modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
         :meth:`FlutterMode.to_dict`), states, interface_states, sizes, timings, and the
         static equilibrium's status when states were solved for."""
         static = self.static
@@ -273,7 +273,7 @@ class InstabilityResult(Result):
             "status": self.status, "success": self.success, "message": self.message,
             "evidence": self.evidence, "divergence_failure": self.divergence_failure,
             "iterations": int(self.iterations),
-            "proofs": [{str(k): _json_value(v) for k, v in p.to_dict().items()} for p in self.proofs],
+            "proofs": [json_ready(p.to_dict()) for p in self.proofs],
             "modes": [m.to_dict() for m in self.modes],
             "flutter_evidence": self.flutter_evidence,
             "flutter_growth": None if self.flutter_growth is None else self.flutter_growth.to_dict(),
@@ -281,7 +281,7 @@ class InstabilityResult(Result):
             "states": list(self.states),
             "interface_states": {str(k): list(v) for k, v in self.interface_states.items()},
             "sizes": {str(k): int(v) for k, v in self.sizes.items()},
-            "timings": {str(k): finite_or_none(v) for k, v in self.timings.items()},
+            "timings": json_ready(self.timings),
             "static": None if static is None else {
                 "status": getattr(static, "status", None), "success": bool(getattr(static, "success", False)),
                 "message": getattr(static, "message", "")},
@@ -401,32 +401,6 @@ def _strip(states) -> str:
     return "  [" + "".join(GLYPHS.get(s, "?") for s in states) + "]"
 
 
-def finite_or_none(value) -> float | None:
-    """A float for JSON: NaN and ±inf (not JSON) as None."""
-    value = float(value)
-    return value if np.isfinite(value) else None
-
-
-def json_number(value) -> float | str | None:
-    """A float for JSON where an infinite value means something (a bracket's or a window's
-    end): ±inf as the strings ``"inf"`` / ``"-inf"`` (JSON has no infinity; ``float()``
-    reads them back; results.h5 stores the float itself), NaN (unknown) as None."""
-    value = float(value)
-    if np.isnan(value):
-        return None
-    return value if np.isfinite(value) else ("inf" if value > 0 else "-inf")
-
-
 def seconds(t: float) -> str:
     """A duration for people: milliseconds below a second."""
     return f"{t * 1e3:.1f} ms" if t < 1 else f"{t:.2f} s"
-
-
-def _json_value(v):
-    """A proof entry as a JSON value: tuples as lists, floats by :func:`json_number` (a
-    σ-window [0, ∞) is ``[0.0, "inf"]``)."""
-    if isinstance(v, (tuple, list)):
-        return [_json_value(x) for x in v]
-    if isinstance(v, float):
-        return json_number(v)
-    return v

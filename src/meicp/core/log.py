@@ -22,9 +22,29 @@ def world_rank() -> int:
 
 
 def rank0_print(*args, file=None, **kwargs) -> None:
-    """``print`` on rank 0 only, flushed (mpirun interleaves buffered output)."""
+    """``print`` on rank 0 only, flushed (mpirun interleaves buffered output).  When the
+    reader of stdout has gone away (``meicp solve s.toml | head -1``) the rest of the output
+    is dropped quietly (:func:`stdout_closed`): the run itself goes on to its end."""
     if world_rank() == 0:
-        print(*args, file=file or sys.stdout, flush=True, **kwargs)
+        out = file or sys.stdout
+        try:
+            print(*args, file=out, flush=True, **kwargs)
+        except BrokenPipeError:
+            if out is not sys.stdout:
+                raise
+            stdout_closed()
+
+
+def stdout_closed() -> None:
+    """Send what is still to be printed to stdout to /dev/null: its reader has closed the
+    pipe.  Without this every later print, and Python's own flush at exit, would fail
+    again ("Exception ignored ... BrokenPipeError", exit status 120)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (AttributeError, OSError, ValueError):  # not a descriptor (a capture): nothing to redirect
+        pass
 
 
 class _Rank0Filter(logging.Filter):

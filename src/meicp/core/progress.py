@@ -4,7 +4,10 @@ by ``meicp solve`` by default and by the other commands with ``-v``, silent unde
 
 Cheap by construction: :meth:`Progress.update` reads a clock and returns unless
 ``INTERVAL`` seconds have passed since the last line (the first line waits ``FIRST``
-seconds, so short loops print nothing).
+seconds, so short loops print nothing).  :class:`Ticker` does the same for a phase that
+says in its own words where it is (a SLEPc eigen-solve's restarts, a SNES's iterations, the
+windows of a condensed proof: :mod:`meicp.petsc.monitor`, :mod:`meicp.contact.divergence.cover`).
+The intervals are read when a line is due, so setting them to 0 (a test) shows every line.
 """
 
 from __future__ import annotations
@@ -74,3 +77,40 @@ class Progress:
             left = _duration(elapsed * (1 - fraction) / fraction)
             text += f", {left if left.startswith('under') else 'about ' + left} left"
         log.info(text + (f"; {detail}" if detail else ""))
+
+
+class Ticker:
+    """Lines about one phase in its own words, at most one per ``interval`` seconds (default
+    :data:`INTERVAL`), the first after :data:`FIRST` seconds: a phase that ends sooner says
+    nothing.  ``what`` starts every line::
+
+        ticker = Ticker("eigen-solve -meicp_as_")
+        ...
+        ticker.say(lambda: f"restart {its}, {nconv} of {nev} converged")
+
+    ``say`` takes the text or a function making it, called only when a line is due."""
+
+    def __init__(self, what: str, *, interval: float | None = None, clock=time.monotonic):
+        self.what, self.interval, self.clock = what, interval, clock
+        self.start = clock()
+        self.next = None
+        self.lines = 0
+
+    def due(self) -> bool:
+        """Whether a line would be printed now (the logger shows INFO and the time has come)."""
+        now = self.clock()
+        if self.next is None:
+            self.next = self.start + FIRST
+        return now >= self.next and log.isEnabledFor(logging.INFO)
+
+    def say(self, text) -> None:
+        if not self.due():
+            return
+        now = self.clock()
+        self.next = now + (INTERVAL if self.interval is None else self.interval)
+        self.lines += 1
+        log.info("%s: %s (%s)", self.what, text() if callable(text) else text, _clock(now - self.start))
+
+
+def _clock(seconds: float) -> str:
+    return f"{seconds:.1f} s" if seconds < 60 else _duration(seconds)

@@ -11,6 +11,8 @@ In the output directory::
                     open the .xdmf in ParaView, Warp By Vector with ``mode_k`` (scale 1 = the
                     PNG's picture)
     mode.png        the fastest mode on the deformed lattice (or the "stable" lattice)
+                    (each PNG is an extra: one Matplotlib cannot draw is left out with a
+                    warning, the other files written all the same)
     flutter_mode.png  the fastest flutter mode (real part of its shape; only when there is one)
     contacts.png    states (and forces) along each contact line (only when there is one)
 
@@ -36,7 +38,8 @@ In the output directory::
                                    each MEiCP's divergence verdict: enumerate,
                                    rayleigh-inertia, rayleigh-window+condensed-…,
                                    certified-mode, none) and ``divergence_proofs`` (JSON:
-                                   test, statement, sigma_window, supports visited)
+                                   test, statement, sigma_window, supports visited;
+                                   numbers as :mod:`meicp.core.json_values` writes them)
 ``/scene``                         the scene as TOML text (the file's own text when known,
                                    else regenerated from the parsed scene)
 ``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
@@ -71,8 +74,9 @@ In the output directory::
                                    ``eicp_outcomes`` (JSON: method, status, message of
                                    each MEiCP, null where every DOF was held)
 ``/critical_friction`` (when       attributes ``value`` (inf: none found), ``found``, and
-computed)                          ``lower``, ``upper``, ``exact``, ``evidence`` as far as
-                                   known (:func:`critical_friction_record`)
+asked for)                         ``lower``, ``upper``, ``exact``, ``evidence`` as far as
+                                   known (:func:`critical_friction_record`); or ``error``
+                                   alone: why μ_c was not determined
 ``/overrides``                     attributes: the solver settings given on the command
                                    line (``method``, ``target``, ``nev``), over the scene's
 =================================  ==========================================================
@@ -102,6 +106,7 @@ result in :mod:`meicp.io.results_prepare`, the HDF5 writer in :mod:`meicp.io.res
 from __future__ import annotations
 
 import dataclasses
+import logging
 import os
 import shutil
 from pathlib import Path
@@ -121,6 +126,8 @@ from .results_prepare import _line_forces, _prepare
 from .results_records import _scene_text, critical_friction_record, scene_to_toml, versions
 from .results_schema import (CODE_LEGEND, DESCRIPTIONS, FIELD_DESCRIPTIONS, FILES, FORMAT,
                              FORMAT_VERSION, STATE_CODES, STATE_FLAGS, STATIC_FIELDS)
+
+log = logging.getLogger("meicp")
 
 #: the public names, wherever they are defined
 __all__ = ["write_results", "versions", "critical_friction_record", "scene_to_toml", "FORMAT",
@@ -178,17 +185,15 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
         # mode.png is about divergence: "stable" there means no divergence mode (flutter has its PNG)
         divergence = getattr(result, "divergence", None)
         no_divergence = getattr(result, "stable", None) if divergence is None else divergence is False
-        plotting.plot_mode(model, stage / FILES["mode_png"], fastest, stable=no_divergence,
-                  n_modes=len(modes))
-        written["mode_png"] = FILES["mode_png"]
+        _picture(written, "mode_png", lambda path: plotting.plot_mode(
+            model, path, fastest, stable=no_divergence, n_modes=len(modes)), stage)
         if prep["flutter_modes"]:
             m = prep["flutter_modes"][0]
             shape = dataclasses.replace(m["mode"], x=m["x"].real)
-            plotting.plot_mode(model, stage / FILES["flutter_png"], shape, heading=(
+            _picture(written, "flutter_png", lambda path: plotting.plot_mode(model, path, shape, heading=(
                 f"fastest flutter mode (real part of x), σ = {m['sigma'].real:.6g} {m['sigma'].imag:+.4g}i, "
                 f"growth rate {shape.growth_rate:.4g}, frequency {shape.frequency:.4g}"),
-                n_modes=len(prep["flutter_modes"]))
-            written["flutter_png"] = FILES["flutter_png"]
+                n_modes=len(prep["flutter_modes"])), stage)
         if prep["lines"]:
             per_line = _line_forces(prep, scene.nx)
             u = prep["static_u"]
@@ -203,9 +208,21 @@ def _write_all(stage: Path, scene: Scene, result, prep: dict, text: str, vers: d
                     sup = modes[0]["interface_support"].get(key)
                 lines.append(plotting.ContactLine(label=label, friction=mu, states=prep["states"].get(key) or None,
                                          support=sup, scale=u_scale, **per_line[key]))
-            plotting.plot_contacts(model, stage / FILES["contacts_png"], lines)
-            written["contacts_png"] = FILES["contacts_png"]
+            _picture(written, "contacts_png", lambda path: plotting.plot_contacts(model, path, lines), stage)
     return written
+
+
+def _picture(written: dict, key: str, draw, stage: Path) -> None:
+    """Draw one PNG into the staging directory.  A picture is an extra: when Matplotlib
+    cannot draw it the results are written all the same, without it, and a warning says why
+    (the numbers are in results.h5 and lattice.h5)."""
+    try:
+        draw(stage / FILES[key])
+    except Exception as exc:  # noqa: BLE001 - whatever Matplotlib raises, the verdict's files stand
+        log.warning("%s not written: %s: %s", FILES[key], type(exc).__name__, exc)
+        (stage / FILES[key]).unlink(missing_ok=True)
+        return
+    written[key] = FILES[key]
 
 
 def write_results(directory, scene, result, *, comm=None, scene_text: str | None = None,
@@ -292,7 +309,7 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
                     os.replace(stage / written[key], directory / written[key])
                 moved = True
         if plots:  # a stale PNG from an earlier run of another scene would mislead
-            for key in ("flutter_png", "contacts_png"):  # flutter_mode.png: a run without flutter modes
+            for key in ("mode_png", "flutter_png", "contacts_png"):  # not drawn this time (no flutter mode; failed)
                 if key not in written and (directory / FILES[key]).exists():
                     (directory / FILES[key]).unlink()
         return written

@@ -9,7 +9,10 @@ from ..scene import STATES
 from .lattice_output import coded
 
 FORMAT = "meicp-results"
-FORMAT_VERSION = 1
+#: 2: the JSON attribute ``divergence_proofs`` writes an infinite σ-window end as null with a
+#: ``sigma_window_infinite`` flag (1 wrote the string "inf"; :mod:`meicp.core.json_values`),
+#: and ``/critical_friction`` may hold ``error`` alone (μ_c asked for and not determined)
+FORMAT_VERSION = 2
 #: contact state → code (0 = not a contact node, -1 = unknown state)
 STATE_CODES = {s: k for k, s in enumerate(STATES, start=1)}
 CODE_LEGEND = "0 not a contact node, " + ", ".join(f"{k} {s}" for s, k in STATE_CODES.items()) \

@@ -80,3 +80,71 @@ def _bytes(n: float) -> str:
     while n >= 1000 and k < len(units) - 1:
         n, k = n / 1000, k + 1
     return f"{n:.3g} {units[k]}"
+
+
+# --------------------------------------------------------------------------- what a run costs
+
+#: ``analyze`` of the two-layer lattice at 10⁶ DOFs with every base contact sliding, by ranks:
+#: (seconds, bytes per rank) measured on this machine (docs/benchmarks.md, "scaling": 36.5 s
+#: and 4.1 GB on 1 rank, 22.9 s and 2.9 GB per rank on 2), with time ∝ n^1.15 and memory ∝
+#: n^1.05 measured from 10⁴ to 10⁶ DOFs
+MEASURED_ANALYSIS = {1: (36.5, 4.1e9), 2: (22.9, 2.9e9)}
+#: the static frictional equilibrium (``states = "solve"``, the sparse mixed LCP) at 10⁶ DOFs on
+#: 2 ranks, added to the analysis: up to 161 s and 6.9 GB per rank (docs/benchmarks.md,
+#: data/scenes/extensive_solve.toml); assumed to grow like the analysis
+MEASURED_STATIC = (161.0, 6.9e9)
+TIME_EXPONENT, MEMORY_EXPONENT = 1.15, 1.05
+#: at or below this many DOFs a run takes about a second and the estimate is not worth a line
+SMALL_DOFS = 10_000
+
+
+@dataclass(frozen=True)
+class CostEstimate:
+    """A run's typical cost from :func:`typical_cost`: ``seconds`` of wall time and ``bytes``
+    per rank on ``ranks`` ranks; ``low_bytes`` the per-rank share of the certain lower bound
+    :func:`check_size` refuses by; ``static`` whether the static equilibrium is included."""
+
+    dofs: int
+    ranks: int
+    seconds: float
+    bytes: float
+    low_bytes: float
+    static: bool
+
+    def describe(self) -> str:
+        """One line for the progress output."""
+        what = "analysis" + (" with the static equilibrium" if self.static else "")
+        if self.dofs <= SMALL_DOFS:
+            return f"size: {self.dofs:,} DOFs, a small {what}: about a second, well under 1 GB"
+        more = " (more ranks extrapolated from 2)" if self.ranks > 2 else ""
+        return (f"size: {self.dofs:,} DOFs; {what} on {self.ranks} rank(s) typically takes about "
+                f"{_duration(self.seconds)} and {_bytes(self.bytes)} per rank (at least {_bytes(self.low_bytes)}), "
+                f"scaled from runs measured at 10⁶ DOFs{more}; a long search or proof can take several times longer")
+
+
+def typical_cost(scene: Scene, ranks: int = 1, *, static: bool = False) -> CostEstimate:
+    """What an analysis of ``scene`` typically costs on ``ranks`` ranks: the measurements of
+    :data:`MEASURED_ANALYSIS` (and :data:`MEASURED_STATIC` when ``static``: the contact states
+    come from the static equilibrium) scaled to the scene's DOFs.  A typical figure, not a
+    bound: the divergence verdict of an undecided search or a condensed proof can take several
+    times longer, and a 2-rank run is assumed to split further in proportion."""
+    ranks = max(int(ranks), 1)
+    dofs = estimate_size(scene).dofs
+    seconds, per_rank = MEASURED_ANALYSIS[min(ranks, 2)]
+    if static:
+        seconds, per_rank = seconds + MEASURED_STATIC[0], max(per_rank, MEASURED_STATIC[1])
+    spread = 2 / ranks if ranks > 2 else 1.0
+    size = dofs / 1e6
+    return CostEstimate(dofs, ranks, seconds * spread * size ** TIME_EXPONENT,
+                        per_rank * spread * size ** MEMORY_EXPONENT,
+                        estimate_size(scene).bytes / ranks, static)
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 1:
+        return "under a second"
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"

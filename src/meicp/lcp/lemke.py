@@ -23,6 +23,7 @@ import warnings
 import numpy as np
 import scipy.linalg
 
+from ..core.progress import Progress
 from .problem import DEFAULT_TOL, LCPProblem, LCPResult, best_of, certify, refine_on_support
 
 
@@ -134,7 +135,9 @@ def _pivot(M: np.ndarray, q: np.ndarray, max_iter: int, pivot_tol: float, reinve
     pivot(row, col, Z0)
     iterations = 1
     status, message = "max_iterations", f"no termination within {max_iter} pivots"
+    progress = Progress(f"Lemke on {n} unknowns", unit="pivots")  # a pivot is O(n²): minutes at n = 8,000
     while iterations < max_iter:
+        progress.update(iterations)
         entering = leaving + n if leaving < n else leaving - n  # complement of the leaving one
         if reinvert_every and iterations % reinvert_every == 0:
             reinvert()

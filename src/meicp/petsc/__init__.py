@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import glob
 import importlib.util
+import signal
 import sys
 
 import numpy
@@ -87,8 +88,21 @@ def import_petsc():
         except Exception as exc:  # noqa: BLE001 - a build mismatch raises more than ImportError
             raise MissingDependency(describe([f"PETSc/SLEPc cannot be loaded: {type(exc).__name__}: "
                                               f"{exc}"])) from exc
+        _give_sigpipe_back()
     from petsc4py import PETSc
     return PETSc
+
+
+def _give_sigpipe_back() -> None:
+    """Python ignores SIGPIPE, so that a write to a closed pipe raises BrokenPipeError;
+    PETSc's initialisation installs its own handler, which turns ``meicp ... | head`` into an
+    ``MPI_Abort`` (exit 59) on the first write after the reader left.  Ignore it again (its
+    other handlers, SIGSEGV and SIGFPE, stay: their report is PETSc's).  Only the main
+    thread may set a handler; elsewhere PETSc's stays."""
+    try:
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    except (ValueError, AttributeError):  # not the main thread; no SIGPIPE (not POSIX)
+        pass
 
 
 def _check_bindings() -> None:

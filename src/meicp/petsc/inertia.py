@@ -22,7 +22,7 @@ from ..core.matrix import is_petsc_mat
 from ..core.validation import is_symmetric
 from . import import_petsc
 from .mat import destroying, mat_from_scipy, symmetric_part
-from .options import INERTIA, OptionsScope
+from .options import INERTIA, OptionsScope, require_mumps_factor
 
 PREFIX = INERTIA
 #: the rounding margin of a definiteness proof, in units of ``sqrt(n)·eps`` relative to the
@@ -46,6 +46,7 @@ def inertia(A) -> tuple[int, int, int]:
                     "pc_factor_mat_solver_type": "mumps", **INERTIA_OPTIONS}
         with OptionsScope(PREFIX, defaults) as scope:
             scope.configure(ksp)
+            require_mumps_factor(ksp, PREFIX, ("cholesky",), "the inertia proof")
             ksp.setUp()
         nneg, nzero, npos = ksp.getPC().getFactorMatrix().getInertia()
         return int(nneg), int(nzero), int(npos)

@@ -27,6 +27,7 @@ from contextlib import contextmanager
 
 from ..core.errors import PetscOptionError, PetscSolveError
 from . import given_options, import_petsc
+from .monitor import watch
 
 log = logging.getLogger("meicp.petsc")
 
@@ -120,6 +121,22 @@ def set_from_options(obj, prefix: str, defaults=()) -> None:
                                + (f" (given: {given})" if given else ""), exc.ierr) from None
 
 
+def require_mumps_factor(ksp, prefix: str, kinds: tuple[str, ...], purpose: str) -> None:
+    """After :func:`set_from_options`: a :class:`PetscOptionError` naming the options unless
+    the KSP's preconditioner is a MUMPS factorisation of one of ``kinds`` (``"cholesky"``,
+    ``"lu"``).  ``purpose``: what needs it (a proof reads the factor itself — its inertia, its
+    Schur complement — so ``-<prefix>pc_type jacobi`` would end in a PETSc error deep inside;
+    a value PETSc accepts is not always one the proof can use).  The same on every rank."""
+    pc = ksp.getPC()
+    kind, solver = pc.getType(), pc.getFactorSolverType() if pc.getType() in kinds else None
+    if kind in kinds and solver == "mumps":
+        return
+    given = f"-{prefix}pc_type {kind}" if kind not in kinds else f"-{prefix}pc_factor_mat_solver_type {solver}"
+    raise PetscOptionError(f"{given}: {purpose} reads a MUMPS factorisation (pc_type {' or '.join(kinds)}, "
+                           f"pc_factor_mat_solver_type mumps); leave -{prefix}pc_type and "
+                           f"-{prefix}pc_factor_mat_solver_type at their defaults")
+
+
 def _format(value) -> str | None:
     if value is True or value is None:
         return None  # a flag
@@ -171,8 +188,10 @@ class OptionsScope:
 
     def configure(self, obj) -> None:
         """Give a PETSc/SLEPc object this scope's prefix and its options
-        (:func:`set_from_options`: a rejected value names the options the user gave)."""
+        (:func:`set_from_options`: a rejected value names the options the user gave), and an
+        EPS or SNES its progress lines (:func:`meicp.petsc.monitor.watch`)."""
         set_from_options(obj, self.prefix, self._defaults_only)
+        watch(obj, self.prefix)
 
     def __exit__(self, *exc) -> None:
         PETSc = import_petsc()

@@ -27,7 +27,7 @@ from ..core.comm import mpi_comm
 from . import import_petsc, mumps_c
 from .comm import to_petsc_comm
 from .mat import mat_from_local_csr, ownership
-from .options import SCHUR, OptionsScope, mumps_controls
+from .options import SCHUR, OptionsScope, mumps_controls, require_mumps_factor
 
 _C = None
 _MUMPS = {"pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 2}  # AMF ordering (no METIS in Debian's MUMPS)
@@ -97,6 +97,7 @@ def schur_complement(A, rows: np.ndarray, *, symmetric: bool, options: dict | No
                     "mat_mumps_icntl_35": 2, "mat_mumps_cntl_7": SCHUR_LOW_RANK}
         with OptionsScope(SCHUR, defaults, options) as scope:
             scope.configure(ksp)
+            require_mumps_factor(ksp, SCHUR, ("cholesky", "lu"), "the condensation onto the contact DOFs")
             pc = ksp.getPC()
             pc.setFactorSetUpSolverType()
             F = pc.getFactorMatrix()
@@ -194,6 +195,7 @@ class MumpsFactor:
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky" if symmetric else "lu", **_MUMPS}
         with OptionsScope(SCHUR, defaults, options) as scope:
             scope.configure(self.ksp)
+            require_mumps_factor(self.ksp, SCHUR, ("cholesky", "lu"), "the condensation onto the contact DOFs")
             self.ksp.setUp()
         self.lo, self.hi = self.A.getOwnershipRange()
         self.n = self.A.getSize()[0]

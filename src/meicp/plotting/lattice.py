@@ -20,6 +20,21 @@ from ..lattice.assembly import as_model
 from ..lattice.model import LatticeModel
 
 INTERFACE_COLOUR = "0.35"
+#: characters of a scene's title shown in a picture's heading, and of a layer's name in a
+#: legend: a scene file may hold megabytes of title, and Matplotlib sizes the canvas to its
+#: text (a 10 kB title asked for a 124,492-pixel-wide image and failed; 3 MB never finished)
+TITLE_CHARACTERS = 120
+NAME_CHARACTERS = 40
+
+
+def plain(text, limit: int = TITLE_CHARACTERS) -> str:
+    """Text from a scene as Matplotlib should draw it: on one line, at most ``limit``
+    characters (cut with "…"), and ``$`` drawn as itself rather than starting mathtext (an
+    unbalanced or bad formula in a title raised ValueError while saving)."""
+    text = " ".join(str(text).split())
+    if len(text) > limit:
+        text = text[:limit - 1] + "…"
+    return text.replace("$", r"\$")
 
 
 def _corners(model: LatticeModel, j0: float, j1: float, i0: float, i1: float) -> np.ndarray:
@@ -77,8 +92,8 @@ def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 6000
             ax.scatter(pos[:, 0], pos[:, 1], s=max(2.0, min(30.0, 3000.0 / model.n_nodes)),
                        c=[colours[m] for m in mat], edgecolors="k", linewidths=0.4, zorder=3)
 
-    handles = [Patch(facecolor=colours[k], label=f"{m.name}: k = {m.stiffness:g}, ρ = {m.density:g}"
-                     + (" (embedded)" if m.kind == "embedded" else ""))
+    handles = [Patch(facecolor=colours[k], label=f"{plain(m.name, NAME_CHARACTERS)}: k = {m.stiffness:g}, "
+                     f"ρ = {m.density:g}" + (" (embedded)" if m.kind == "embedded" else ""))
                for k, m in enumerate(model.materials)]
     if detailed and not np.all(same):
         handles.append(Line2D([], [], color=INTERFACE_COLOUR, label="bond between materials"))
@@ -119,7 +134,8 @@ def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 6000
             xs = np.array([-0.5, nx - 0.5]) * a + model.shear * a * r
             ax.plot(xs, [a * r, a * r], color="red", lw=2.0, ls="-.", zorder=4)
             handles.append(Line2D([], [], color="red", lw=2.0, ls="-.",
-                                  label=f"frictional interface above {itf.below}, μ = {itf.friction:g}"))
+                                  label=f"frictional interface above {plain(itf.below, NAME_CHARACTERS)}, "
+                                        f"μ = {itf.friction:g}"))
 
     xs = model.positions(0, 1)[:, 0]
     xt = model.positions(ny - 1, ny)[:, 0]
@@ -128,7 +144,7 @@ def plot_lattice(scene, path, *, title: str | None = None, max_bonds: int = 6000
     ax.set_aspect("equal")
     ax.set_xlabel("x")
     ax.set_ylabel("y")
-    name = title or model.scene.title or (Path(model.scene.source).stem if model.scene.source else "lattice")
+    name = _scene_name(model, title)
     ax.set_title(f"{name}: {nx} × {ny} nodes, {model.n_dofs:,} DOFs"
                  + (f", shear {model.shear:g}" if model.shear else ""))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
@@ -200,7 +216,7 @@ def _save(fig, path: Path, dpi: int) -> Path:
 
 def _scene_name(model: LatticeModel, title):
     s = model.scene
-    return title or s.title or (Path(s.source).stem if s.source else "lattice")
+    return plain(title or s.title or (Path(s.source).stem if s.source else "lattice"))
 
 
 def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str | None = None,
@@ -262,7 +278,8 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
         mat = model.material()
         ax.scatter(cur[:, 0], cur[:, 1], s=max(2.0, min(24.0, 3000.0 / model.n_nodes)),
                    c=[colours[m] for m in mat], edgecolors="k", linewidths=0.3, zorder=3)
-    handles += [Patch(facecolor=colours[k], label=f"{m.name}: k = {m.stiffness:g}, ρ = {m.density:g}")
+    handles += [Patch(facecolor=colours[k], label=f"{plain(m.name, NAME_CHARACTERS)}: k = {m.stiffness:g}, "
+                                                  f"ρ = {m.density:g}")
                 for k, m in enumerate(model.materials)]
     if not np.all(same):
         handles.append(Line2D([], [], color=INTERFACE_COLOUR, label="bond between materials"))
@@ -271,7 +288,8 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
         xs = np.array([-0.5, nx - 0.5]) * a + model.shear * a * r
         ax.plot(xs, [a * r, a * r], color="red", lw=1.5, ls="-.", alpha=0.6, zorder=1)
         handles.append(Line2D([], [], color="red", lw=1.5, ls="-.", alpha=0.6,
-                              label=f"frictional interface above {itf.below}, μ = {itf.friction:g}"))
+                              label=f"frictional interface above {plain(itf.below, NAME_CHARACTERS)}, "
+                                    f"μ = {itf.friction:g}"))
     if model.boundary.bottom == "contact":
         ax.add_patch(Rectangle((lo[0] - 0.5 * a, -0.75 * a), hi[0] - lo[0] + a, 0.45 * a,
                                facecolor="0.85", edgecolor="k", hatch="///", lw=0.8, zorder=0))
@@ -394,7 +412,7 @@ def plot_contacts(scene, path, lines, *, title: str | None = None, dpi: int = 15
                                    label=f"active in fastest mode ×{sup.size}"))
             ax.set_yticks([])
             ax.set_ylim(-1, 1)
-            ax.set_title(f"{line.label}, μ = {line.friction:g}", fontsize=10, loc="left")
+            ax.set_title(f"{plain(line.label)}, μ = {line.friction:g}", fontsize=10, loc="left")
             ax.legend(handles=seen, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
                       frameon=False)
         elif kind == "forces":

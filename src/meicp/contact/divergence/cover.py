@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...core.progress import Ticker
 from ...lcp.certificates import optimise_scaling, pd_certificate
 from .windows import chord_factor, window_certificate
 
@@ -205,12 +206,16 @@ def cover(condense_at, settings: Cover, *, sharper_tau=None, scalings: dict | No
     tau, s_split = settings.tau, settings.split_scale
     windows, failed = [], None
     pending = first_windows(settings)
+    ticker = Ticker("condensed proof", interval=0.0)  # once it has run a while: a line per window
     while pending:
         a, b = pending.pop(0)
         if (sharper_tau is not None and np.isfinite(b) and s_split > tau
                 and chord_factor(a, b, s_split) < 0.9 * chord_factor(a, b, tau)):
             tau, sharper_tau = max(tau, sharper_tau()), None
         window = certify_window(samples, a, b, tau)
+        outcome = "proved" if window.proved else "split" if window.halves else "not proved"
+        ticker.say(lambda: f"window [{a:.4g}, {b:.4g}] {outcome}; {len(windows) + window.proved} window(s) "
+                           f"proved, {len(pending) + len(window.halves)} left, {samples.count} condensation(s)")
         if window.proved:
             windows.append((a, b, window.margin, window.how))
         elif window.halves:
