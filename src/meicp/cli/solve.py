@@ -41,7 +41,7 @@ from ..contact.modal import has_contact
 from ..contact.result import finite_or_none, json_number, seconds
 from ..core.errors import ConvergenceError, ProblemError
 from ..core.log import configure_logging, rank0_print
-from ..io.results import critical_friction_record, versions, write_results
+from ..io.results import critical_friction_record, plain_json, versions, write_results
 from ..io.scene import load_scene, read_scene_text
 from ..petsc.options import report_not_offered
 from ..petsc.stages import stage
@@ -170,12 +170,24 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
         doc["critical_friction"] = None if mu_c_error is None else {"error": mu_c_error}
     else:
         record = critical_friction_record(mu_c)
-        # an infinite end keeps its meaning ("inf": no mode found / none at any μ), as in results.h5
-        doc["critical_friction"] = {k: json_number(v) if isinstance(v, float) else v for k, v in record.items()}
+        # an infinite end keeps its meaning ("inf": no mode found / none at any μ), as in results.h5;
+        # the onsets' records say it by their flags (found, none_at_any_mu), their numbers plain
+        doc["critical_friction"] = {k: json_number(v) if isinstance(v, float) else plain_json(v)
+                                    for k, v in record.items()}
     doc["output"] = None if out is None else {"directory": str(out), **{k: str(v) for k, v in (files or {}).items()}}
     doc["wall"] = {k: finite_or_none(v) for k, v in (wall or {}).items()}
     doc["versions"] = versions()
     return doc
+
+
+def critical_friction_rows(mu_c) -> list[tuple[str, str]]:
+    """The summary's rows of the critical friction: the first onset, then each onset's bracket
+    and evidence (divergence alone with ``--no-flutter``)."""
+    if mu_c.flutter is None:
+        return [("μ_c", mu_c.describe()), ("", f"  {mu_c.evidence}")]
+    return [("μ_c", mu_c.describe()),
+            ("  divergence", mu_c.divergence.describe("σ = 0 mode")), ("", f"  {mu_c.divergence.evidence}"),
+            ("  flutter", mu_c.flutter.describe("flutter mode")), ("", f"  {mu_c.flutter.evidence}")]
 
 
 def format_rows(rows) -> str:
@@ -230,13 +242,13 @@ def _run(args, comm, t0) -> int:
         t3 = time.perf_counter()
         try:
             with stage("critical_friction"):
-                mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
+                # collective; the enumeration alike on every rank; --no-flutter skips the flutter onset too
+                mu_c = critical_friction(scene, comm=comm, flutter=False if args.no_flutter else None)
         except ConvergenceError as exc:  # the analysis is done: keep it, say μ_c failed, exit 1
             mu_c_failed = str(exc)
             rows.append(("μ_c", f"not determined: {exc}"))
         else:
-            rows.append(("μ_c", mu_c.describe()))
-            rows.append(("", f"  {mu_c.evidence}"))
+            rows += critical_friction_rows(mu_c)
         wall["critical_friction"] = time.perf_counter() - t3
     if out is not None:
         log.info(f"writing results to {out}/")
