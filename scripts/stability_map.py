@@ -5,9 +5,9 @@
 For each μ (the base's and every frictional interface's friction set to μ, states as the
 scene says) one ``meicp.analyze``: the divergence verdict and the growth rate √σ of the
 fastest divergence mode, the flutter verdict and the growth rate Re √σ (and frequency) of
-the fastest flutter mode (docs/flutter.md).  Then the smallest μ with flutter, by bisection
-on the flutter verdict (stopping, and saying so, where a verdict is undecided), and μ_c
-from ``meicp.critical_friction``.  Writes ``stability_map.csv`` and ``stability_map.png``
+the fastest flutter mode (docs/flutter.md).  Then both onsets from ``meicp.critical_friction``:
+μ_c (divergence) and μ_f, the smallest μ with flutter, a certified bracket (an interval cover
+from μ = 0 and a certified mode: docs/critical-friction.md, "The flutter onset").  Writes ``stability_map.csv`` and ``stability_map.png``
 into ``docs/benchmarks/`` (``$MEICP_BENCH_DIR`` overrides).
 """
 
@@ -36,22 +36,6 @@ def point(scene, mu: float) -> dict:
             "stable": r.stable}
 
 
-def smallest_flutter_mu(scene, hi: float, rel_tol: float = 1e-6) -> dict:
-    """Bisection on analyze's flutter verdict in [0, hi] (flutter at hi).  An undecided verdict
-    ends it: the bracket is reported as it stands."""
-    lo, verdict_lo = 0.0, meicp.analyze(with_friction(scene, 0.0)).flutter
-    if verdict_lo is not False:
-        return {"lower": 0.0, "upper": 0.0, "note": f"flutter verdict at μ = 0 is {verdict_lo}"}
-    while hi - lo > rel_tol * hi:
-        mid = 0.5 * (lo + hi)
-        f = meicp.analyze(with_friction(scene, mid)).flutter
-        if f is None:
-            return {"lower": lo, "upper": hi, "note": f"undecided at μ = {mid:.8g} (a collision of eigenvalues "
-                                                      "at rounding level): the bisection stops there"}
-        lo, hi = (lo, mid) if f else (mid, hi)
-    return {"lower": lo, "upper": hi, "note": "flutter verdict False (a proof) at lower, True at upper"}
-
-
 def chart(rows: list, extra: dict, path) -> None:
     import matplotlib
 
@@ -70,7 +54,8 @@ def chart(rows: list, extra: dict, path) -> None:
     if extra.get("mu_c") is not None:
         ax.axvline(extra["mu_c"], color="C0", ls=":", lw=1, label=f"μ_c = {extra['mu_c']:.4g} (critical_friction)")
     if extra.get("mu_flutter") is not None:
-        ax.axvline(extra["mu_flutter"], color="C1", ls=":", lw=1, label=f"flutter from μ ≈ {extra['mu_flutter']:.4g}")
+        ax.axvline(extra["mu_flutter"], color="C1", ls=":", lw=1, label=f"flutter from μ_f ≈ {extra['mu_flutter']:.4g} "
+                                                                          "(critical_friction)")
     ax.set_xlabel("friction coefficient μ")
     ax.set_ylabel("growth rate (1/time)")
     ax.set_title(f"{extra['scene']}: stability of steady sliding against μ", fontsize=10)
@@ -88,11 +73,12 @@ def main() -> None:
     args = ap.parse_args()
     scene = meicp.load_scene(args.scene)
     rows = [point(scene, float(mu)) for mu in np.linspace(0.0, args.mu_max, args.steps)]
-    first = next((float(r["mu"]) for r in rows if r["flutter"] is True), None)
-    bracket = smallest_flutter_mu(scene, first) if first else None
-    mu_c = meicp.critical_friction(scene)
+    onsets = meicp.critical_friction(scene)
+    mu_c, flutter = onsets.divergence.upper, onsets.flutter
+    bracket = {"lower": flutter.lower, "upper": flutter.upper, "exact": flutter.exact, "note": flutter.evidence}
     extra = {"scene": args.scene.split("/")[-1], "mu_c": mu_c if np.isfinite(mu_c) else None,
-             "mu_flutter": bracket["upper"] if bracket else None, "bracket": bracket}
+             "mu_flutter": flutter.upper if np.isfinite(flutter.upper) else None, "bracket": bracket,
+             "first": onsets.first}
     write_rows(csv_path("stability_map"), rows, FIELDS, keep=lambda r: False)
     chart(rows, extra, out_dir() / "stability_map.png")
     print(json.dumps(extra, indent=1))
