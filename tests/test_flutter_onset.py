@@ -52,6 +52,28 @@ def test_the_cover_lemma_stops_short_of_the_analytic_collision(a, b):
     assert beyond.radius == 0 and not beyond.real
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(2, 6), interface=st.booleans())
+def test_every_sigma_is_real_inside_a_proved_interval(seed, n, interface):
+    """Random families (A₀ symmetric, A₁ arbitrary; B diagonal, or B₀ SPD with μ in B₁ as on
+    a frictional interface): wherever cover_step proves an interval, QZ finds only real σ."""
+    rng = np.random.default_rng(seed)
+    A0 = rng.normal(size=(n, n))
+    A0 = A0 + A0.T
+    A1 = rng.normal(size=(n, n))
+    B0, B1 = np.diag(rng.uniform(0.5, 2.0, n)), np.zeros((n, n))
+    if interface:
+        L = rng.normal(size=(n, n)) * 0.3
+        B0, B1 = B0 + L @ L.T, rng.normal(size=(n, n)) * 0.1
+    fam = family(A0, A1, B0, B1)
+    mu0 = rng.uniform(0.0, 0.5)
+    step = cover_step(fam, mu0)
+    for mu in mu0 + step.radius * np.linspace(-1, 1, 9):
+        if step.radius > 0 and np.isfinite(mu):
+            sigma = sl.eigvals(*(M.toarray() for M in fam.at(mu)))
+            assert np.abs(sigma.imag).max() <= 1e-6 * np.abs(sigma).max(), (mu, sigma)
+
+
 def test_a_crossing_without_interaction_stops_the_cover_but_not_the_truth():
     """C(μ) = [[a, μ, 0], [−μ, b, 0], [0, 0, d]]: the lower eigenvalue of the pair crosses d at
     μ* = √(((a−b)/2)² − ((a+b)/2 − d)²) without interacting, and the pair collides at c =
@@ -195,3 +217,29 @@ def test_the_overall_onset_is_the_smaller_one(div, flu, first, value, exact):
     mu = CriticalFriction.of(div, flu)
     assert mu.first == first and float(mu) == value and mu.exact is exact
     assert mu.lower == min(div.lower, flu.lower) and mu.upper == min(div.upper, flu.upper)
+
+
+# ------------------------------------------------------------------------ CLI and files
+
+def test_solve_prints_both_onsets_and_results_h5_stores_them(cli, tmp_path):
+    import h5py
+
+    code, out, err = cli("solve", SCENES / "two_layers.toml", "--critical-friction", "-o", tmp_path / "o", "-q")
+    assert code == 0, err
+    lines = out.splitlines()
+    first = next(ln for ln in lines if ln.startswith("μ_c"))
+    divergence = next(ln for ln in lines if ln.startswith("  divergence"))
+    flutter = next(ln for ln in lines if ln.startswith("  flutter "))
+    assert "flutter first" in first and "1.90603249 (exact)" in divergence and "exact within" in flutter
+    assert "interval cover, a proof" in out and "certified non-real σ" in out
+    with h5py.File(tmp_path / "o" / "results.h5") as f:
+        g = f["critical_friction"]
+        assert g.attrs["first"] == "flutter" and g["flutter"].attrs["upper"] == g.attrs["value"] < 0.6307635
+        assert g["divergence"].attrs["value"] == pytest.approx(1.90603249, rel=1e-8) and bool(g["flutter"].attrs["exact"])
+        assert g["flutter/mode"].attrs["sigma_imag"] > g["flutter/mode"].attrs["radius"] > 0
+    code, out, err = cli("solve", SCENES / "two_layers.toml", "--critical-friction", "--no-flutter", "-o",
+                         tmp_path / "n", "-q")
+    assert code == 0 and "1.90603249 (exact)" in next(ln for ln in out.splitlines() if ln.startswith("μ_c"))
+    assert not any(ln.startswith("  flutter ") for ln in out.splitlines())
+    with h5py.File(tmp_path / "n" / "results.h5") as f:
+        assert "flutter" not in f["critical_friction"] and "divergence" in f["critical_friction"]
