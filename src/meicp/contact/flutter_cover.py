@@ -108,7 +108,7 @@ def _eigen(family: PencilFamily, mu: float):
         if mu == 0 and _is_symmetric(family.A0):
             w, V = np.linalg.eigh(0.5 * (C + C.T))  # C is symmetric; the mean only fixes rounding
         else:
-            w, V = sl.eig(C, overwrite_a=True, check_finite=False)
+            w, V = sl.eig(C, overwrite_a=True)
         X = s[:, None] * V
     else:
         B_dense = B.toarray()
@@ -153,8 +153,11 @@ def cover_step(family: PencilFamily, mu: float) -> CoverStep:
         return CoverStep(mu, 0.0, real, 0.0, why)
     lam, X = found
     gap = float(np.min(np.diff(lam))) if n > 1 else np.inf
-    with np.errstate(all="ignore"):
-        radius = _radius(family, mu, lam, X)
+    try:
+        with np.errstate(all="ignore"):
+            radius = _radius(family, mu, lam, X)
+    except np.linalg.LinAlgError:  # B(μ)X singular to working precision: nothing to build on
+        return CoverStep(mu, 0.0, True, gap, "the eigenvectors are singular to working precision")
     if not np.isfinite(radius) and n > 1:
         radius = 0.0
     if radius <= 0:

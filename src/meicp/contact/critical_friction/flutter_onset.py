@@ -175,6 +175,10 @@ class _Cover:
                 trend = min(1.0, step.radius / self.last) if self.started and self.last > 0 else 1.0
                 self.reached, self.started = centre + step.radius, True
                 self.ahead, self.last = 0.95 * trend * step.radius, step.radius
+                if self.reached < target and self.ahead < stall * self.reached:
+                    self.stalled = (f"at μ = {self.reached:.10g} (intervals shorter than "
+                                    f"{stall * self.reached:.1e}: two eigenvalues meet just above)")
+                    return
                 continue
             if not self.started:
                 self.stalled = (f"at μ = 0: {step.why} (a degenerate eigenvalue of the symmetric pencil may split "
