@@ -73,16 +73,17 @@ def test_solve_json_is_the_only_stdout_and_carries_sigma_and_mu_c(tmp_path):
     assert doc["verdict"] == "UNSTABLE" and doc["stable"] is False and doc["analysis"] == "instability"
     assert doc["modes"][0]["sigma"] == pytest.approx(0.3290549424, rel=1e-9)
     assert doc["modes"][0]["support"] == [0, 1, 2, 3, 4] and doc["modes"][0]["residual"] <= 1e-10
-    mu_c = doc["critical_friction"]
-    assert mu_c["value"] == pytest.approx(1.906032490, rel=1e-8) and mu_c["found"] is True
-    assert set(mu_c) == {"value", "found", "lower", "upper", "exact", "evidence"}
+    mu_c = doc["critical_friction"]  # flutter starts first (docs/flutter.md §6), divergence at 1.906
+    assert mu_c["divergence"]["value"] == pytest.approx(1.906032490, rel=1e-8) and mu_c["found"] is True
+    assert mu_c["first"] == "flutter" and mu_c["value"] == mu_c["flutter"]["upper"] == pytest.approx(0.6307632, rel=1e-6)
+    assert set(mu_c) == {"value", "found", "lower", "upper", "exact", "evidence", "first", "divergence", "flutter"}
     assert doc["output"]["results"].endswith("results.h5") and doc["versions"]["petsc"]
     assert set(doc["wall"]) >= {"analyze", "critical_friction", "write", "total"}
     assert "analysis: started" in out.stderr  # progress went to stderr
     with h5py.File(tmp_path / "o" / "results.h5") as f:
         g = f["critical_friction"]
         assert g.attrs["value"] == pytest.approx(mu_c["value"], rel=1e-14) and bool(g.attrs["found"])
-        assert "enumerated" in g.attrs["evidence"]
+        assert "enumerated" in g.attrs["evidence"] and g["divergence"].attrs["value"] == mu_c["divergence"]["value"]
 
 
 def test_infinite_ends_of_the_critical_friction_are_null_with_a_flag_in_json():
@@ -100,10 +101,16 @@ def test_infinite_ends_of_the_critical_friction_are_null_with_a_flag_in_json():
     mu = CriticalFriction(float("inf"), float("inf"), True, "proved at every μ")
     doc = solve_json(SimpleNamespace(scene="s.toml"), meicp.load_scene(SCENES / "two_layers.toml"),
                      InstabilityResult(status="solved"), ranks=1, mu_c=mu)
-    assert doc["critical_friction"] == {"value": None, "found": False, "lower": None, "upper": None,
-                                        "exact": True, "evidence": "proved at every μ", "value_infinite": 1,
-                                        "lower_infinite": 1, "upper_infinite": 1}
+    got = doc["critical_friction"]
+    assert {k: got[k] for k in ("value", "found", "lower", "upper", "exact", "evidence", "value_infinite",
+                                "lower_infinite", "upper_infinite")} == {
+        "value": None, "found": False, "lower": None, "upper": None, "exact": True, "evidence": "proved at every μ",
+        "value_infinite": 1, "lower_infinite": 1, "upper_infinite": 1}
     assert (doc["format"], doc["format_version"]) == ("meicp-solve", 2)
+    # the onsets' records: an infinite end said by their flags (flutter not analysed: None)
+    assert got["first"] is None and got["flutter"] is None
+    assert got["divergence"]["lower"] is None and got["divergence"]["none_at_any_mu"] is True
+    assert got["divergence"]["found"] is False
     json.dumps(doc, allow_nan=False)  # valid JSON
 
 

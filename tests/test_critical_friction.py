@@ -22,10 +22,10 @@ SCENES = [(nx, states, shear) for nx in (6, 9, 12) for states in ("slip+", "slip
 @pytest.mark.parametrize("nx,states,shear", SCENES)
 def test_the_bracket_contains_the_enumerated_critical_friction(nx, states, shear, monkeypatch):
     scene = two_layer_scene(nx, (2, 2), mu=1.0, states=states, shear=shear)
-    exact = critical_friction(scene, bisection=False)
+    exact = critical_friction(scene, bisection=False, flutter=False)
     assert exact.exact and exact.lower == exact.upper == float(exact)
     monkeypatch.setattr(limits, "CRITICAL_J", 0)  # force the bracket on a scene enumeration can check
-    b = critical_friction(scene)
+    b = critical_friction(scene, flutter=False)
     assert b.lower <= b.upper and "lower end" in b.evidence
     if math.isfinite(exact):
         assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
@@ -46,13 +46,13 @@ def test_the_float_behaves_as_a_float():
 
 
 def test_a_wide_lattice_gets_a_narrow_bracket():
-    mu = critical_friction(two_layer_scene(60, (2, 2), mu=1.0, states="slip-", shear=0.5))
+    mu = critical_friction(two_layer_scene(60, (2, 2), mu=1.0, states="slip-", shear=0.5), flutter=False)
     assert mu.exact and 1.080 < mu.lower <= mu.upper < 1.4605 and mu.width <= cf.EXACT_WIDTH  # issue 14: ≤ 1.4605
     assert "certified on the whole reduced lattice" in mu.evidence
 
 
 def test_a_stable_direction_is_proved_free_of_modes_at_every_mu():
-    mu = critical_friction(two_layer_scene(40, (4, 4), mu=1.0, states="slip+", shear=0.5))
+    mu = critical_friction(two_layer_scene(40, (4, 4), mu=1.0, states="slip+", shear=0.5), flutter=False)
     assert mu == np.inf and mu.lower == np.inf and mu.exact and "∞" in mu.evidence
 
 
@@ -63,7 +63,7 @@ def test_cli_prints_the_bracket_and_results_h5_stores_it(cli, tmp_path):
     text = (scenes / "two_layers.toml").read_text().replace("nx = 5", "nx = 30")
     path = tmp_path / "wide.toml"
     path.write_text(text)
-    code, out, err = cli("solve", path, "--critical-friction", "-o", tmp_path / "o", "-q")
+    code, out, err = cli("solve", path, "--critical-friction", "--no-flutter", "-o", tmp_path / "o", "-q")
     assert code == 0, err
     line = next(ln for ln in out.splitlines() if ln.startswith("μ_c"))
     assert "exact" in line and "proved ≥" in line and "|J| = 30: lower end" in out
@@ -88,7 +88,7 @@ def test_the_lower_end_is_at_least_the_uncondensed_bound():
     p = pieces_of(K, M, reduced_system(model, contact_lines(scene, model), ()), friction="unit")
     N = p.N.toarray()
     top = sl.eigh(-0.5 * (N + N.T), p.Kt.toarray(), eigvals_only=True)[-1]
-    mu = critical_friction(scene)
+    mu = critical_friction(scene, flutter=False)
     assert 0 < 1 / top <= mu.lower <= mu.upper
 
 
@@ -98,9 +98,9 @@ def test_the_bracket_contains_the_enumerated_value_on_shipped_scenes(name, monke
     import meicp
 
     scene = meicp.load_scene(Path(__file__).resolve().parents[1] / "data" / "scenes" / f"{name}.toml")
-    exact = critical_friction(scene, bisection=False)
+    exact = critical_friction(scene, bisection=False, flutter=False)
     monkeypatch.setattr(limits, "CRITICAL_J", 0)
-    b = critical_friction(scene)
+    b = critical_friction(scene, flutter=False)
     assert b.lower <= exact * (1 + 1e-12) and b.upper >= exact * (1 - 1e-12)
 
 
@@ -115,7 +115,7 @@ def test_divergence_born_above_zero_is_no_contradiction_of_mu_c():
     import meicp
 
     scene = two_layer_scene(6, (2, 6), mu=500.0, states="slip-", shear=-0.5)
-    got = critical_friction(scene)
+    got = critical_friction(scene, flutter=False)
     assert math.isinf(float(got)) and got.lower == 1000.0 and got.exact
     start = float(re.search(r"from μ ≈ ([0-9.]+), born at σ", got.evidence).group(1))
 
@@ -137,7 +137,7 @@ def test_solve_keeps_its_analysis_when_the_critical_friction_fails(cli, tmp_path
     import meicp.cli.solve as solve
     from meicp.core.errors import ConvergenceError
 
-    def failing(scene, comm=None):
+    def failing(scene, comm=None, flutter=None):
         raise ConvergenceError("μ as an eigenvalue and existence disagree")
 
     monkeypatch.setattr(solve, "critical_friction", failing)

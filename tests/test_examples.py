@@ -88,7 +88,9 @@ def test_readme_python_example(monkeypatch):
     assert support == "[0 1 2 3 4]"
     assert lines[2] == "True True"
     assert float(lines[3].split(":")[0]) == pytest.approx(0.174, abs=5e-4) and "the fastest, proved" in lines[3]
-    assert float(lines[4]) == pytest.approx(1.906, abs=5e-4)
+    onset, first, mu_c = lines[4].split()
+    assert float(onset) == pytest.approx(0.630763, abs=1e-6) and first == "flutter"
+    assert float(mu_c) == pytest.approx(1.906, abs=5e-4)
     assert lines[5] == "True [1. 0. 2.]"
     assert lines[6] == "InstabilityResult(UNSTABLE: divergence σ=0.3291 (1 mode), flutter growth 0.174 (3 modes), 40 DOFs)"
 

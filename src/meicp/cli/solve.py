@@ -48,7 +48,7 @@ from ..contact.result import seconds
 from ..core.errors import MeicpError, ProblemError
 from ..core.json_values import json_ready
 from ..core.log import configure_logging, rank0_print
-from ..io.results import critical_friction_record, versions, write_results
+from ..io.results import critical_friction_record, plain_json, versions, write_results
 from ..io.scene import load_scene, read_scene_text
 from ..lattice.size import typical_cost
 from ..petsc.options import report_not_offered
@@ -190,6 +190,16 @@ def solve_json(args, scene, result, *, ranks: int, mu_c=None, files=None, wall=N
     return json_ready(doc)
 
 
+def critical_friction_rows(mu_c) -> list[tuple[str, str]]:
+    """The summary's rows of the critical friction: the first onset, then each onset's bracket
+    and evidence (divergence alone with ``--no-flutter``)."""
+    if mu_c.flutter is None:
+        return [("μ_c", mu_c.describe()), ("", f"  {mu_c.evidence}")]
+    return [("μ_c", mu_c.describe()),
+            ("  divergence", mu_c.divergence.describe("σ = 0 mode")), ("", f"  {mu_c.divergence.evidence}"),
+            ("  flutter", mu_c.flutter.describe("flutter mode")), ("", f"  {mu_c.flutter.evidence}")]
+
+
 def format_rows(rows) -> str:
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}".rstrip() for k, v in rows)
@@ -243,14 +253,14 @@ def _run(args, comm, t0) -> int:
         t3 = time.perf_counter()
         try:
             with stage("critical_friction"):
-                mu_c = critical_friction(scene, comm=comm)  # collective; the enumeration alike on every rank
+                # collective; the enumeration alike on every rank; --no-flutter skips the flutter onset too
+                mu_c = critical_friction(scene, comm=comm, flutter=False if args.no_flutter else None)
         except MeicpError as exc:  # an extra: the verdict is done and stands, with its files and exit code
             mu_c_failed = cli_spelling(str(exc))
             log.warning(f"μ_c not determined: {mu_c_failed}")
             rows.append(("μ_c", f"not determined: {mu_c_failed}"))
         else:
-            rows.append(("μ_c", mu_c.describe()))
-            rows.append(("", f"  {mu_c.evidence}"))
+            rows += critical_friction_rows(mu_c)
         wall["critical_friction"] = time.perf_counter() - t3
     if out is not None:
         log.info(f"writing results to {out}/")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..eicp.problem import EiCPResult
-from .critical_friction.result import CriticalFriction
+from .critical_friction.result import CriticalFriction, Onset
 from .divergence.verdict import DivergenceProof
 from .flutter_growth import FlutterGrowth
 from .result import FlutterMode, InstabilityResult, Mode
@@ -96,5 +96,19 @@ def _critical_friction(record: dict | None):
     if record is None:
         return None
     if all(record.get(k) is not None for k in ("lower", "upper", "exact")):
-        return CriticalFriction(record["upper"], record["lower"], bool(record["exact"]), record.get("evidence") or "")
+        divergence, flutter = (_onset(record.get(name)) for name in ("divergence", "flutter"))
+        return CriticalFriction(record["upper"], record["lower"], bool(record["exact"]), record.get("evidence") or "",
+                                divergence=divergence, flutter=flutter)
     return float(record["value"])
+
+
+def _onset(record: dict | None) -> Onset | None:
+    if not record:
+        return None
+    mode = record.get("mode")
+    if mode:
+        mode = FlutterMode(sigma=complex(mode["sigma_real"], mode["sigma_imag"]), x=np.zeros(0),
+                           residual=float(mode["residual"]), radius=float(mode["radius"]),
+                           branch=mode.get("branch", ""))
+    return Onset(float(record["lower"]), float(record["upper"]), bool(record["exact"]), record.get("evidence", ""),
+                 mode or None)

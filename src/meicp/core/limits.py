@@ -70,6 +70,13 @@ FLUTTER_OFF_CLUSTER_FROM = 200_000
 #: form, rounded up); the search is skipped when that much is not available
 FLUTTER_SEARCH_BYTES_PER_DOF = 10_000
 
+#: the flutter onset's bracket (critical_friction): at most this many dense eigen-decompositions
+#: (the interval cover and the verdicts together) and this many seconds; past FLUTTER_DENSE_MAX
+#: at most FLUTTER_ONSET_SEARCHES searches (each a complex factorisation of the pencil)
+FLUTTER_ONSET_SOLVES = 4000
+FLUTTER_ONSET_SECONDS = 60.0
+FLUTTER_ONSET_SEARCHES = 6
+
 # -- static frictional equilibrium ------------------------------------------------------------
 
 #: most contacts (all lines together) for the condensed dense formulation

@@ -74,9 +74,15 @@ In the output directory::
                                    ``eicp_outcomes`` (JSON: method, status, message of
                                    each MEiCP, null where every DOF was held)
 ``/critical_friction`` (when       attributes ``value`` (inf: none found), ``found``, and
-asked for)                         ``lower``, ``upper``, ``exact``, ``evidence`` as far as
-                                   known (:func:`critical_friction_record`); or ``error``
+computed)                          ``lower``, ``upper``, ``exact``, ``evidence`` as far as
+                                   known, ``first`` ("flutter" / "divergence"; absent when
+                                   undecided) (:func:`critical_friction_record`); or ``error``
                                    alone: why μ_c was not determined
+``/critical_friction/flutter``     ``lower``, ``upper``, ``none_at_any_mu``, ``exact``,
+                                   ``evidence``; ``flutter/mode`` the certified mode at
+                                   ``upper`` (``sigma_real``, ``sigma_imag``,
+                                   ``growth_rate``, ``frequency``, ``residual``, ``radius``,
+                                   ``branch``); no ``flutter`` when not analysed
 ``/overrides``                     attributes: the solver settings given on the command
                                    line (``method``, ``target``, ``nev``), over the scene's
 =================================  ==========================================================
@@ -123,15 +129,15 @@ from ..scene import Scene
 from .lattice_output import write_lattice
 from .results_h5 import _write_h5
 from .results_prepare import _line_forces, _prepare
-from .results_records import _scene_text, critical_friction_record, scene_to_toml, versions
+from .results_records import _scene_text, critical_friction_record, onset_record, plain_json, scene_to_toml, versions
 from .results_schema import (CODE_LEGEND, DESCRIPTIONS, FIELD_DESCRIPTIONS, FILES, FORMAT,
                              FORMAT_VERSION, STATE_CODES, STATE_FLAGS, STATIC_FIELDS)
 
 log = logging.getLogger("meicp")
 
 #: the public names, wherever they are defined
-__all__ = ["write_results", "versions", "critical_friction_record", "scene_to_toml", "FORMAT",
-           "FORMAT_VERSION", "STATE_CODES", "CODE_LEGEND", "STATE_FLAGS", "DESCRIPTIONS",
+__all__ = ["write_results", "versions", "critical_friction_record", "onset_record", "plain_json", "scene_to_toml",
+           "FORMAT", "FORMAT_VERSION", "STATE_CODES", "CODE_LEGEND", "STATE_FLAGS", "DESCRIPTIONS",
            "FIELD_DESCRIPTIONS", "FILES", "STATIC_FIELDS"]
 
 

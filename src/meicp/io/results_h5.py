@@ -39,6 +39,15 @@ def _set_attrs(obj, items) -> None:
             obj.attrs[str(k)] = v
 
 
+def _set_record(group, record: dict) -> None:
+    """A record's values as attributes of ``group``, each nested record (dict) as a subgroup
+    of its own (None: nothing written)."""
+    _set_attrs(group, {k: v for k, v in record.items() if not isinstance(v, dict)})
+    for k, v in record.items():
+        if isinstance(v, dict):
+            _set_record(group.create_group(str(k)), v)
+
+
 def _strings(values, width: int = 16) -> np.ndarray:
     return np.array([str(v).encode() for v in values], dtype=f"S{width}")
 
@@ -186,7 +195,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
 
         if mu_c is not None:  # a number (perhaps carrying its bracket), or its record already
             record = mu_c if isinstance(mu_c, dict) else critical_friction_record(mu_c)
-            _set_attrs(f.create_group("critical_friction"), record)
+            _set_record(f.create_group("critical_friction"), record)
         if overrides:
             _set_attrs(f.create_group("overrides"), overrides)
         _describe(f)

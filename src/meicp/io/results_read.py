@@ -60,7 +60,21 @@ def read_results(path) -> dict:
         cert = _attrs(f.get("certificates"))
         record["eicp"] = json.loads(cert["eicp_outcomes"]) if "eicp_outcomes" in cert else None
         record["static"] = _static(f.get("static"))
-        record["critical_friction"] = _attrs(f["critical_friction"]) if "critical_friction" in f else None
+        record["critical_friction"] = _critical_friction(f.get("critical_friction"))
+    return record
+
+
+def _critical_friction(g) -> dict | None:
+    """``/critical_friction``'s attributes, with each onset's (``divergence``, ``flutter``, and
+    ``flutter["mode"]``) when stored."""
+    if g is None:
+        return None
+    record = _attrs(g)
+    for name in ("divergence", "flutter"):
+        if name in g:
+            record[name] = _attrs(g[name])
+            if name == "flutter":
+                record[name]["mode"] = _attrs(g[name]["mode"]) if "mode" in g[name] else None
     return record
 
 

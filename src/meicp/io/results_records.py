@@ -42,7 +42,10 @@ def critical_friction_record(mu, evidence: str | None = None) -> dict:
     """The critical friction as results.h5 and ``meicp solve --json`` store it: ``value``
     (inf when no μ up to the search's bound gives a mode), ``found``, and ``lower``,
     ``upper``, ``exact``, ``evidence`` as far as the number carries them (a float subclass
-    with a certified bracket); ``evidence`` stands in when it carries none.  Unknown: None."""
+    with a certified bracket); ``evidence`` stands in when it carries none.  Unknown: None.
+    A :class:`~meicp.contact.critical_friction.CriticalFriction` adds ``first`` and the two
+    onsets, ``divergence`` and ``flutter`` (:func:`onset_record`; ``flutter`` None when it was
+    not analysed)."""
     value = float(mu)
     record = {"value": value, "found": math.isfinite(value)}
     for name in ("lower", "upper", "exact", "evidence"):
@@ -50,7 +53,41 @@ def critical_friction_record(mu, evidence: str | None = None) -> dict:
         record[name] = float(item) if isinstance(item, (float, np.floating)) else item
     if record["evidence"] is None:
         record["evidence"] = evidence
+    if getattr(mu, "divergence", None) is not None:
+        record["first"] = mu.first
+        record["divergence"] = onset_record(mu.divergence)
+        record["flutter"] = None if mu.flutter is None else onset_record(mu.flutter)
     return record
+
+
+def onset_record(onset) -> dict:
+    """One onset's bracket (:class:`~meicp.contact.critical_friction.result.Onset`) as a
+    record: ``value`` (= ``upper``), ``found`` (upper finite), ``lower``, ``upper`` (floats,
+    inf included), ``none_at_any_mu`` (lower inf: proved at every μ), ``exact``, ``evidence``,
+    and for flutter ``mode``: the certified mode at ``upper`` (σ, growth rate, frequency,
+    residual, radius, branch), None without one."""
+    lower, upper = float(onset.lower), float(onset.upper)
+    record = {"value": upper, "found": math.isfinite(upper), "lower": lower, "upper": upper,
+              "none_at_any_mu": lower == math.inf, "exact": bool(onset.exact), "evidence": onset.evidence}
+    mode = getattr(onset, "mode", None)
+    record["mode"] = None if mode is None else {
+        "sigma_real": float(mode.sigma.real), "sigma_imag": float(mode.sigma.imag),
+        "growth_rate": float(mode.growth_rate), "frequency": float(mode.frequency),
+        "residual": float(mode.residual), "radius": float(mode.radius), "branch": mode.branch}
+    return record
+
+
+def plain_json(value):
+    """A record's nested values for JSON: dicts and lists recursively, a float that is not
+    finite as None (an onset record says what an infinite end means: ``found``,
+    ``none_at_any_mu``)."""
+    if isinstance(value, dict):
+        return {k: plain_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain_json(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
 
 
 def _toml_value(v) -> str:

@@ -1,7 +1,8 @@
-"""``critical_friction``: the smallest μ at which a σ = 0 divergence mode exists, as a
-certified bracket — the driver that picks the enumerated path (:mod:`.enumerated`), the
-bracket (:mod:`.bracket`) and the cross-check (:mod:`.bisection`) per grazing case, on one
-assembly of the lattice."""
+"""``critical_friction``: the friction at which the first instability starts, as a certified
+bracket — the driver.  Divergence (the smallest μ with a σ = 0 mode): the enumerated path
+(:mod:`.enumerated`), the bracket (:mod:`.bracket`) and the cross-check (:mod:`.bisection`)
+per grazing case; flutter (the smallest μ with a non-real σ of the sliding pencil):
+:mod:`.flutter_onset`; both on one assembly of the lattice."""
 
 from __future__ import annotations
 
@@ -24,28 +25,38 @@ from ..problem import contact_states
 from .bisection import check_by_bisection
 from .bracket import bracket
 from .enumerated import condense_in_mu, friction_pencil, singular_message, smallest_mu
-from .result import EXACT_WIDTH, CriticalFriction
+from .flutter_onset import flutter_onset
+from .result import EXACT_WIDTH, CriticalFriction, Onset
 
 log = logging.getLogger("meicp")
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
-                      comm=None) -> CriticalFriction:
-    """The smallest μ ≥ 0 at which a σ = 0 divergence mode exists for the scene's states
-    (prescribed ones; with ``"solve"`` the states of the static equilibrium at the scene's μ),
-    one μ for every frictional contact, as a :class:`CriticalFriction`: a float (the upper
-    end, a μ with a certified mode; ``inf`` when none was found up to ``mu_max``) carrying
-    ``lower``, ``upper``, ``exact`` and ``evidence``.
+                      comm=None, flutter: bool | None = None) -> CriticalFriction:
+    """The friction at which the first instability starts for the scene's states (prescribed
+    ones; with ``"solve"`` the states of the static equilibrium at the scene's μ), one μ for
+    every frictional contact, as a :class:`CriticalFriction`: a float (the upper end of the
+    overall bracket, a μ with a certified mode; ``inf`` when none was found up to ``mu_max``)
+    carrying ``lower``, ``upper``, ``exact``, ``evidence``, the two onsets ``divergence`` and
+    ``flutter`` (each an :class:`~.result.Onset`) and ``first`` (which starts first, when the
+    brackets prove it).  ``scene``: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction`
+    also reads a file).  The lattice is assembled once, in SciPy on every rank.
 
-    scene: a :class:`~meicp.scene.Scene` (:func:`meicp.critical_friction` also reads a file).
-    Solved as an EiCP in μ, condensed onto its complementarity DOFs
+    The flutter onset μ_f (``flutter``: default the scene's ``[solver] flutter``, true; False
+    skips it, ``result.flutter`` is then None and the value the divergence onset): the
+    smallest μ with a non-real σ of the sliding pencil, bracketed by an interval cover proved
+    flutter-free from μ = 0 and a certified flutter mode (:mod:`.flutter_onset`;
+    docs/critical-friction.md, "The flutter onset").
+
+    The divergence onset μ_c, the smallest μ with a σ = 0 mode, is solved as an EiCP in μ,
+    condensed onto its complementarity DOFs
     (docs/critical-friction.md).  Up to ``limits.CRITICAL_J`` (20) complementarity pairs per grazing
     case it is enumerated — all 2^|J| supports, exact — and the μ_c found is lifted back to
     the whole reduced lattice and certified there.  Beyond, a bracket: the lower end is a
     proof (diagonally scaled positive definiteness of the condensed S + μR on [0, lower]),
     the upper end a σ = 0 mode found by a search on the condensed problem, lifted and
     certified on the whole reduced lattice; condensations by MUMPS (collective on ``comm``;
-    None: this process alone).  The lattice is assembled once, in SciPy on every rank.
+    None: this process alone).
 
     A motion of zero stiffness once the slip DOFs are eliminated — a floating body, or a
     block free to slide as a whole — makes the μ-independent block singular.  If such a
@@ -66,7 +77,17 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     """
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     comm = mpi_comm(comm)
+    flutter = _check_flutter(scene, flutter)
     lattice, lines = _friction_states(scene)
+    divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm)
+    if not flutter:
+        return CriticalFriction.of(divergence, None)
+    return CriticalFriction.of(divergence, flutter_onset(lattice, lines, scene, mu_max=mu_max, comm=comm,
+                                                         options=dict(scene.petsc)))
+
+
+def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm) -> Onset:
+    """The divergence onset μ_c (:func:`critical_friction`'s docstring)."""
     K, M = lattice.K, lattice.M
     ends, evidence = [], []
     small, singular, enumerated = True, False, True
@@ -106,9 +127,9 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
         text = ("every support of the condensed EiCP in μ enumerated" +
                 (f": no σ = 0 mode up to μ = {mu_max:g}" if not np.isfinite(upper) else
                  ", the smallest μ certified on the whole reduced lattice") + note)
-        return CriticalFriction(upper, lower, True, text)
+        return Onset(lower, upper, True, text)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
-    return CriticalFriction(upper, min(lower, upper), exact, "; ".join(evidence))
+    return Onset(min(lower, upper), upper, exact, "; ".join(evidence))
 
 
 #: the loosest bisection tolerance: a relative width in μ
@@ -138,6 +159,14 @@ def friction_pencils(scene):
             raise ProblemError(singular_message(f"the condensed block −Ac (order {Ac.shape[0]}) is singular"))
         out.append((Ac, Bc, Jc))
     return out
+
+
+def _check_flutter(scene: Scene, flutter) -> bool:
+    if flutter is None:
+        return bool(scene.solver.flutter)
+    if not isinstance(flutter, (bool, np.bool_)):
+        raise ProblemError(f"flutter must be True or False, got {flutter!r}")
+    return bool(flutter)
 
 
 def _friction_states(scene) -> tuple[LatticeMatrices, tuple]:
