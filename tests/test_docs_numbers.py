@@ -48,7 +48,7 @@ def test_mu_c_of_two_layers():
 
 def test_the_flutter_onset_of_two_layers():
     """flutter.md's bisection bracket, verdict by verdict, and the README's rounding of it."""
-    below, above = map(float, re.search(r"False, a proof, at ([\d.]+); True at ([\d.]+)", FLUTTER).groups())
+    below, above = map(float, re.search(r"False \(a proof\) at ([\d.]+)\s+and True at ([\d.]+)", FLUTTER).groups())
     at_below, at_above = meicp.analyze(two_layers(below)), meicp.analyze(two_layers(above))
     assert at_below.flutter is False and "proof" in at_below.flutter_evidence
     assert at_above.flutter is True

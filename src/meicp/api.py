@@ -26,6 +26,7 @@ from .contact.instability import analyze as _analyze
 from .contact.result import InstabilityResult
 from .contact.stored import result_from_record
 from .core.comm import check_comm, world_if_none
+from .core.errors import ProblemError
 from .core.validation import checked_keywords
 from .io.results_read import read_results
 from .io.scene import as_scene
@@ -114,14 +115,19 @@ def analyze(scene, comm=None, *, method: str | None = None, lam_min: float | Non
 
 @checked_keywords()
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
-                      comm=None) -> CriticalFriction:
-    """The critical friction μ_c: the smallest μ ≥ 0 at which a σ = 0 divergence mode
-    exists for the scene's contact states (one μ for every frictional contact), as a
-    certified bracket (docs/critical-friction.md).
+                      comm=None, flutter: bool | None = None) -> CriticalFriction:
+    """The friction at which the first instability starts, for the scene's contact states
+    (one μ for every frictional contact), as certified brackets of both onsets
+    (docs/critical-friction.md): ``divergence`` — μ_c, the smallest μ ≥ 0 with a σ = 0
+    divergence mode — and ``flutter`` — μ_f, the smallest μ with a non-real σ of the sliding
+    pencil; the float's value is the smaller, ``first`` says which.
 
-    Up to 20 complementarity pairs the EiCP in μ is enumerated (exact); beyond, a bracket:
-    the lower end proved, the upper end a certified mode.  Prescribed states are taken as
-    they are; ``"solve"`` takes the states of the static equilibrium at the scene's μ.
+    μ_c: up to 20 complementarity pairs the EiCP in μ is enumerated (exact); beyond, a
+    bracket: the lower end proved, the upper end a certified mode.  μ_f: an interval cover
+    from μ = 0 proves the lower end (dense pencils, up to ``FLUTTER_DENSE_MAX`` retained
+    DOFs), a certified flutter mode gives the upper end; past the dense limit the lower end
+    is 0.  Prescribed states are taken as they are; ``"solve"`` takes the states of the
+    static equilibrium at the scene's μ.
 
     Parameters
     ----------
@@ -137,12 +143,17 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     comm : None, mpi4py or PETSc communicator
         The ranks that share the condensations of a bracket (collective).  None:
         ``MPI.COMM_WORLD``, as for :func:`analyze`.
+    flutter : bool or None
+        Bracket the flutter onset too: None takes the scene's ``[solver] flutter`` (default
+        True); False gives the divergence onset alone (faster).
 
     Returns
     -------
     CriticalFriction
-        A float (the upper end: a μ with a certified σ = 0 mode; ``inf`` when none up to
-        ``mu_max``) carrying ``lower``, ``upper``, ``exact``, ``evidence`` and ``describe()``.
+        A float (the upper end of the overall bracket: a μ with a certified mode; ``inf``
+        when none up to ``mu_max``) carrying ``lower``, ``upper``, ``exact``, ``evidence``,
+        ``divergence`` and ``flutter`` (each an ``Onset``: ``lower``, ``upper``, ``exact``,
+        ``evidence``; ``flutter`` None when not analysed), ``first`` and ``describe()``.
 
     Raises
     ------
@@ -156,7 +167,10 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     """
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     scene = as_scene(scene)
-    return _critical_friction(scene, mu_max=mu_max, bisection=bisection, tol=tol, comm=world_if_none(comm))
+    if flutter is not None and not isinstance(flutter, bool):
+        raise ProblemError(f"flutter must be True, False or None, got {flutter!r}")
+    return _critical_friction(scene, mu_max=mu_max, bisection=bisection, tol=tol, comm=world_if_none(comm),
+                              flutter=flutter)
 
 
 @checked_keywords()
