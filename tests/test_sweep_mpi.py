@@ -50,6 +50,22 @@ def test_two_ranks_write_the_csv_one_rank_writes(comm, shared_dir, per_point):
     assert par.run["ranks"] == comm.Get_size() and par.run["per_point_comm"] == per_point
 
 
+def test_split_mode_analyses_each_value_on_its_rank_alone(comm, shared_dir, monkeypatch):
+    """Each value's analysis runs on a one-rank communicator: None would be COMM_WORLD (as
+    meicp.analyze reads it), every rank in one collective analysis of different scenes — on
+    a small scene the answers agree by luck, on a distributed one they mix."""
+    real, sizes = driver.analyze, []
+
+    def recording(scene, comm=None, **options):
+        sizes.append(None if comm is None else comm.Get_size())
+        return real(scene, comm, **options)
+
+    monkeypatch.setattr(driver, "analyze", recording)
+    meicp.sweep(TWO_LAYERS, "friction", MUS, out=shared_dir / "split", comm=comm, progress=False,
+                per_point_comm="split")
+    assert sizes and all(size == 1 for size in sizes)
+
+
 def test_comm_none_under_mpirun_is_the_world(comm):
     """A sweep on each rank alone would write one directory from every rank."""
     assert meicp.sweep(TWO_LAYERS, "friction", "1", progress=False).run["ranks"] == comm.Get_size()

@@ -31,7 +31,7 @@ from pathlib import Path
 from .._version import __version__
 from ..api import analyze
 from ..core import limits
-from ..core.comm import mpi_comm
+from ..core.comm import mpi_comm, world_if_none
 from ..core.errors import MeicpError, ProblemError
 from ..io.results_records import scene_to_toml
 from ..io.scene import as_scene
@@ -131,23 +131,9 @@ def sweep(scene, parameter: str = "friction", values=None, *, out=None, comm=Non
 
 
 def _communicator(comm):
-    """``comm`` made canonical; None under ``mpirun`` means ``COMM_WORLD`` (a sweep on every
-    rank alone would write one directory from each)."""
-    if comm is None and _launched_ranks() > 1:
-        from mpi4py import MPI
-
-        comm = MPI.COMM_WORLD
-    return mpi_comm(comm)
-
-
-def _launched_ranks() -> int:
-    mpi = sys.modules.get("mpi4py.MPI")
-    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
-        return mpi.COMM_WORLD.Get_size()
-    for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"):
-        if os.environ.get(var, "").isdigit():
-            return int(os.environ[var])
-    return 1
+    """``comm`` made canonical; None means ``COMM_WORLD``, as for :func:`meicp.analyze` (a
+    sweep on every rank alone would write one directory from each)."""
+    return mpi_comm(world_if_none(comm))
 
 
 def fingerprint(scene: Scene, key: str, options: dict) -> str:
@@ -266,7 +252,8 @@ class _Run:
         """Each rank its own values, in rounds of one value per rank; rank 0 writes each round."""
         for start in range(0, len(todo), self.ranks):
             mine = todo[start + self.rank] if start + self.rank < len(todo) else None
-            outcome = None if mine is None else (mine, *self._analyze(mine, scenes[mine], None))
+            # this rank alone: None would be every rank (COMM_WORLD), each with another scene
+            outcome = None if mine is None else (mine, *self._analyze(mine, scenes[mine], _alone()))
             gathered = [outcome] if self.comm is None else self.comm.gather(outcome, root=0)
             error = None
             if self.rank == 0:
@@ -349,3 +336,10 @@ def _duration(t: float) -> str:
     if not math.isfinite(t) or t < 60:
         return f"{t:.0f} s"
     return f"{t / 60:.1f} min" if t < 3600 else f"{t / 3600:.1f} h"
+
+
+def _alone():
+    """This process's own communicator (``MPI.COMM_SELF``)."""
+    from mpi4py import MPI
+
+    return MPI.COMM_SELF
