@@ -265,7 +265,7 @@ def test_a_target_where_nothing_converges_within_its_restarts_is_moved_off(monke
         tau = complex(fl.proxy_targets(scene, ["slip+"] * 32, 1)[0])
         got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
     assert got.flutter is True and got.counts["moved"] == 1 and "restarts" in got.evidence
-    assert caps == [fl.SEARCH_RESTARTS, fl.SEARCH_RESTARTS]
+    assert caps == [fl.SEARCH_RESTARTS, fl.LAST_RESTARTS]
     caps.clear()
     with pencil(scene) as pen:
         fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12, off_cluster_tries=0)
