@@ -13,6 +13,7 @@ The intervals are read when a line is due, so setting them to 0 (a test) shows e
 from __future__ import annotations
 
 import logging
+import math
 import time
 
 #: seconds before the first line (a loop that ends sooner prints nothing)
@@ -23,7 +24,11 @@ INTERVAL = 3.0
 log = logging.getLogger("meicp")
 
 
-def _duration(seconds: float) -> str:
+def duration(seconds: float) -> str:
+    """A time span for a progress line or an estimate: ``under 1 s``, ``42 s``, ``3.5 min``,
+    ``1.2 h`` (``?`` when not finite)."""
+    if not math.isfinite(seconds):
+        return "?"
     if seconds < 1:
         return "under 1 s"
     if seconds < 60:
@@ -74,7 +79,7 @@ class Progress:
         if self.work:
             fraction = (done if work_done is None else work_done) / self.work
         if fraction and 0 < fraction < 1:
-            left = _duration(elapsed * (1 - fraction) / fraction)
+            left = duration(elapsed * (1 - fraction) / fraction)
             text += f", {left if left.startswith('under') else 'about ' + left} left"
         log.info(text + (f"; {detail}" if detail else ""))
 
@@ -113,4 +118,4 @@ class Ticker:
 
 
 def _clock(seconds: float) -> str:
-    return f"{seconds:.1f} s" if seconds < 60 else _duration(seconds)
+    return f"{seconds:.1f} s" if seconds < 60 else duration(seconds)

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.errors import ProblemError
+from ..core.progress import duration
 from ..scene import Scene
 
 #: nonzeros per DOF row of K, at most: a node and its 8 neighbours, 2 DOFs each
@@ -118,7 +119,7 @@ class CostEstimate:
             return f"size: {self.dofs:,} DOFs, a small {what}: about a second, well under 1 GB"
         more = " (more ranks extrapolated from 2)" if self.ranks > 2 else ""
         return (f"size: {self.dofs:,} DOFs; {what} on {self.ranks} rank(s) typically takes about "
-                f"{_duration(self.seconds)} and {_bytes(self.bytes)} per rank (at least {_bytes(self.low_bytes)}), "
+                f"{duration(self.seconds)} and {_bytes(self.bytes)} per rank (at least {_bytes(self.low_bytes)}), "
                 f"scaled from runs measured at 10⁶ DOFs{more}; a long search or proof can take several times longer")
 
 
@@ -140,11 +141,4 @@ def typical_cost(scene: Scene, ranks: int = 1, *, static: bool = False) -> CostE
                         estimate_size(scene).bytes / ranks, static)
 
 
-def _duration(seconds: float) -> str:
-    if seconds < 1:
-        return "under a second"
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 5400:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
+

@@ -22,7 +22,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import math
 import os
 import sys
 import time
@@ -33,6 +32,7 @@ from ..api import analyze
 from ..core import limits
 from ..core.comm import mpi_comm, world_if_none
 from ..core.errors import MeicpError, ProblemError
+from ..core.progress import duration
 from ..io.results_records import scene_to_toml
 from ..io.scene import as_scene
 from ..scene import Scene
@@ -289,7 +289,7 @@ class _Run:
         elapsed = time.perf_counter() - self.t0
         left = elapsed / self.finished * (self.total - count)
         self.say(f"{count}/{self.total} {row.line(self.key)}"
-                 + (f"; about {_duration(left)} left" if count < self.total and left >= 1 else ""))
+                 + (f"; about {duration(left)} left" if count < self.total and left >= 1 else ""))
 
     def _close(self) -> None:
         if self.file is not None:
@@ -330,12 +330,6 @@ def _read_json(path: Path) -> dict:
     except (OSError, ValueError):
         return {}
     return doc if isinstance(doc, dict) else {}
-
-
-def _duration(t: float) -> str:
-    if not math.isfinite(t) or t < 60:
-        return f"{t:.0f} s"
-    return f"{t / 60:.1f} min" if t < 3600 else f"{t / 3600:.1f} h"
 
 
 def _alone():
