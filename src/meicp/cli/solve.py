@@ -48,7 +48,7 @@ from ..contact.result import seconds
 from ..core.errors import MeicpError, ProblemError
 from ..core.json_values import json_ready
 from ..core.log import configure_logging, rank0_print
-from ..io.results import critical_friction_record, plain_json, versions, write_results
+from ..io.results import critical_friction_record, versions, write_results
 from ..io.scene import load_scene, read_scene_text
 from ..lattice.size import typical_cost
 from ..petsc.options import report_not_offered

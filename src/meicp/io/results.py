@@ -129,14 +129,14 @@ from ..scene import Scene
 from .lattice_output import write_lattice
 from .results_h5 import _write_h5
 from .results_prepare import _line_forces, _prepare
-from .results_records import _scene_text, critical_friction_record, onset_record, plain_json, scene_to_toml, versions
+from .results_records import _scene_text, critical_friction_record, onset_record, scene_to_toml, versions
 from .results_schema import (CODE_LEGEND, DESCRIPTIONS, FIELD_DESCRIPTIONS, FILES, FORMAT,
                              FORMAT_VERSION, STATE_CODES, STATE_FLAGS, STATIC_FIELDS)
 
 log = logging.getLogger("meicp")
 
 #: the public names, wherever they are defined
-__all__ = ["write_results", "versions", "critical_friction_record", "onset_record", "plain_json", "scene_to_toml",
+__all__ = ["write_results", "versions", "critical_friction_record", "onset_record", "scene_to_toml",
            "FORMAT", "FORMAT_VERSION", "STATE_CODES", "CODE_LEGEND", "STATE_FLAGS", "DESCRIPTIONS",
            "FIELD_DESCRIPTIONS", "FILES", "STATIC_FIELDS"]
 

@@ -77,19 +77,6 @@ def onset_record(onset) -> dict:
     return record
 
 
-def plain_json(value):
-    """A record's nested values for JSON: dicts and lists recursively, a float that is not
-    finite as None (an onset record says what an infinite end means: ``found``,
-    ``none_at_any_mu``)."""
-    if isinstance(value, dict):
-        return {k: plain_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain_json(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value
-
-
 def _toml_value(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
