@@ -204,3 +204,14 @@ def test_cli_sweep_bad_input_exits_2_and_writes_nothing(cli, capsys, tmp_path, a
         code, stderr = exc.code, capsys.readouterr().err
     assert code == 2 and match in stderr, stderr
     assert not (tmp_path / "s").exists()
+
+
+def test_fewer_values_than_ranks_end_cleanly(tmp_path):
+    """One value on 2 ranks: the idle rank initialises PETSc too (its finalisation is
+    collective), else the job aborted at exit with "stack smashing detected"."""
+    from .conftest import meicp_cmd, mpirun, run
+
+    res = run(mpirun(2) + meicp_cmd() + ["sweep", str(SCENES / "two_layers.toml"), "--mu", "0.5", "-o",
+                                         str(tmp_path / "one"), "-q"], timeout=240)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert (tmp_path / "one" / "sweep.csv").read_text().count("\n") == 2
