@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the external reference sets the tests read (provenance and licences: tests/data/README.md)
@@ -16,6 +17,13 @@ def clean_env() -> dict:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
     env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1")
     return env
+
+
+# property tests draw the same examples on every run (CI must not fail on a new draw);
+# HYPOTHESIS_PROFILE=explore draws fresh ones, as a search for counterexamples
+settings.register_profile("repeatable", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
 def run(args, timeout=120, **kw) -> subprocess.CompletedProcess:

@@ -93,6 +93,12 @@ def import_petsc():
     return PETSc
 
 
+def start() -> None:
+    """Initialise PETSc and SLEPc on this rank now (their finalisation at exit is collective:
+    a rank of a job that never used them while another did makes the job abort at exit)."""
+    import_petsc()
+
+
 def _give_sigpipe_back() -> None:
     """Python ignores SIGPIPE, so that a write to a closed pipe raises BrokenPipeError;
     PETSc's initialisation installs its own handler, which turns ``meicp ... | head`` into an

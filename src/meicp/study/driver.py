@@ -34,7 +34,7 @@ from ..core.comm import mpi_comm, world_if_none
 from ..core.errors import MeicpError, ProblemError
 from ..core.progress import duration
 from ..io.results_records import scene_to_toml
-from ..petsc import import_petsc
+from .. import petsc
 from ..io.scene import as_scene
 from ..scene import Scene
 from .parameters import _canonical, describe, is_friction, parse_values, scene_with
@@ -251,10 +251,9 @@ class _Run:
 
     def split(self, todo: list, scenes: list) -> None:
         """Each rank its own values, in rounds of one value per rank; rank 0 writes each round."""
-        # PETSc's finalisation is collective on every rank of the job: a rank that never
-        # analysed a value (fewer values than ranks) must have initialised it too, or the
-        # job aborts at exit ("stack smashing detected" in MPI_Finalize)
-        import_petsc()
+        # a rank that never analyses a value (fewer values than ranks) must start PETSc too:
+        # its finalisation is collective, the job aborted at exit ("stack smashing detected")
+        petsc.start()
         for start in range(0, len(todo), self.ranks):
             mine = todo[start + self.rank] if start + self.rank < len(todo) else None
             # this rank alone: None would be every rank (COMM_WORLD), each with another scene
