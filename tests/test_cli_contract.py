@@ -4,6 +4,7 @@ format keys; a reader that closes the pipe early ends nothing badly, on one rank
 long phases say where they are on stderr, silent under ``-q``."""
 
 import json
+import signal
 import subprocess
 
 import h5py
@@ -87,7 +88,10 @@ def test_a_reader_that_closes_the_pipe_ends_the_run_quietly(tmp_path, ranks, jso
     cmd = (mpirun(2) if ranks == 2 else []) + meicp_cmd() + [
         "solve", str(SCENES / "two_layers.toml"), "-o", str(tmp_path / "o"), "-q"] + (["--json"] if json_flag else [])
     code, err = _pipe_closed_at_once(cmd)
-    assert code == 0, err
+    # 2 ranks: mpirun forwards the ranks' stdout, and when it finds the pipe closed it may die
+    # of SIGPIPE itself, as any program in a shell pipeline does (status 141 in a shell) —
+    # quietly, after the ranks wrote their files (the JSON, which names them, comes last)
+    assert code == 0 or (ranks == 2 and code == -signal.SIGPIPE), (code, err)
     for text in ("MPI_ABORT", "Caught signal", "Broken Pipe", "BrokenPipeError", "Traceback"):
         assert text not in err, err
     with h5py.File(tmp_path / "o" / "results.h5") as f:
