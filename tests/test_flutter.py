@@ -349,6 +349,10 @@ def test_same_flutter_modes_on_two_ranks(comm):
     serial, _ = _forced_search(MPI.COMM_SELF)
     assert abs(got.modes[0].sigma - serial.modes[0].sigma) <= 1e-10 * abs(serial.modes[0].sigma)
     assert rel(growth_frequency(got.modes[0].sigma)[0], growth_frequency(ref.modes[0].sigma)[0]) <= 1e-8
+    # the growth bracket: exact and the same on both (dense), a lower bound alone (search)
+    assert one.flutter_growth.exact and two.flutter_growth.exact
+    assert rel(one.flutter_growth.upper, two.flutter_growth.upper) <= 1e-12
+    assert got.growth.upper is None and rel(got.growth.lower, serial.growth.lower) <= 1e-8
 
 
 def test_solve_writes_and_prints_flutter(cli, tmp_path):
