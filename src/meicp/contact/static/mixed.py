@@ -4,6 +4,7 @@ polish (docs/static-equilibrium.md, "Mixed formulation").  Distributed over ``co
 
 from __future__ import annotations
 
+import logging
 import time
 
 import numpy as np
@@ -16,6 +17,8 @@ from ...petsc.options import STATIC, STATIC_POLISH
 from .data import StaticData
 from .result import StaticResult
 from .states import settle
+
+log = logging.getLogger("meicp")
 
 #: relative diagonal regularisation of the β± and λ rows in the SNES VI stage of the mixed
 #: formulation (removed again by the certified polish)
@@ -252,6 +255,10 @@ def solve_mixed(static: StaticData, *, comm, petsc_options: dict | None, timings
         "formulation = mixed: the LCP matrix is not classified (the mixed matrix, displacements and "
         "reactions together, is not the contact operator: its classes say nothing about the "
         "contact problem; the condensed formulation classifies it)"]
+    # the first SNES iteration holds the factorisation: at 10⁶ DOFs 20 s before its progress line
+    log.info("static equilibrium: mixed LCP of %s unknowns (%d normal reactions, %d frictional contacts) "
+             "assembled in %.1f s; SNES VI on it", f"{system.n:,}", system.nN, system.nF,
+             timings["assemble_mixed"])
     t0 = time.perf_counter()
     z, info = _solve(system, mpi_comm(comm), petsc_options) if system.n else (np.zeros(0), {"attempts": []})
     timings["lcp"] = time.perf_counter() - t0
