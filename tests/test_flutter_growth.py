@@ -112,3 +112,25 @@ def test_search_result_rows_say_fastest_found(monkeypatch):
     assert "not proved the fastest" in rows["flutter growth"]
     assert "fastest found first, not proved the fastest" in rows["flutter modes"]
     assert r.to_dict()["flutter_growth"]["upper"] is None and r.to_dict()["flutter_growth"]["upper_infinite"] == 1
+
+
+def test_flutter_dense_max_buys_the_exact_bracket(monkeypatch, cli):
+    """Past the dense limit the search gives a lower bound only; flutter_dense_max (and
+    --flutter-dense-max) takes the dense path further: the same fastest mode, proved."""
+    from meicp.core import limits
+    from meicp.core.errors import ProblemError
+
+    monkeypatch.setattr(limits, "FLUTTER_DENSE_MAX", 0)
+    scene = lattice(32, (8, 8), 2.0)
+    found = meicp.analyze(scene)
+    proved = meicp.analyze(scene, flutter_dense_max=2000)
+    assert not found.flutter_growth.exact and proved.flutter_growth.exact
+    assert found.flutter_growth.lower <= proved.flutter_growth.upper * (1 + 1e-12)
+    for bad in (-1, 2.5, True, "100"):
+        with pytest.raises(ProblemError, match="flutter_dense_max"):
+            meicp.analyze(scene, flutter_dense_max=bad)
+    code, text, _ = cli("solve", SCENES / "two_layers.toml", "--no-output", "-q", "--flutter-dense-max", "0")
+    assert code == 0 and "not proved the fastest" in text
+    with pytest.raises(SystemExit) as exit_:  # argparse's usage error
+        cli("solve", SCENES / "two_layers.toml", "--no-output", "-q", "--flutter-dense-max", "-3")
+    assert exit_.value.code == 2

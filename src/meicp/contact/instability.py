@@ -69,7 +69,8 @@ SOLVER_OPTIONS = ("target", "nev", "max_iter", "max_j", "options")
 
 
 def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None, tol=None,
-            scene_path=None, flutter: bool | None = None, **solver_options) -> InstabilityResult:
+            scene_path=None, flutter: bool | None = None, flutter_dense_max: int | None = None,
+            **solver_options) -> InstabilityResult:
     """Divergence modes of a scene's contact equilibrium (see the module docstring).
 
     scene: a :class:`~meicp.scene.Scene` (:func:`meicp.analyze` also reads a scene file).
@@ -82,7 +83,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     when the caller read it (the scene's ``source`` says the same; not used here).
     flutter: also decide flutter of steady sliding (:mod:`meicp.contact.flutter`; default the
     scene's ``[solver] flutter``, true); False leaves ``result.flutter`` None, so ``stable``
-    cannot be True.  Collective on ``comm``.
+    cannot be True.  flutter_dense_max: retained DOFs up to which flutter takes the dense path
+    (None: ``limits.FLUTTER_DENSE_MAX``).  Collective on ``comm``.
     """
     t_start = time.perf_counter()
     timings = {}
@@ -92,6 +94,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     lam_min, tol = _check_options(scene, method or scene.solver.method, method is not None, lam_min, tol,
                                   solver_options)
     flutter = _check_flutter(scene, flutter)
+    dense = {} if flutter_dense_max is None else {"dense_max": _check_dense_max(flutter_dense_max)}
     comm = mpi_comm(comm)
     memory, where = available_memory_on(comm)
     check_size(scene, memory=memory, index_max=index_max(), ranks=comm_size(comm), where=where)
@@ -149,12 +152,12 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):
-                        sliding = analyze_flutter(lattice, lines, scene, pencil=pen, static=static,
+                        sliding = analyze_flutter(lattice, lines, scene, pencil=pen, static=static, **dense,
                                                   options=dict(scene.petsc))
             verdicts.append(verdict)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):
-                sliding = analyze_flutter(lattice, lines, scene, static=static, options=dict(scene.petsc))
+                sliding = analyze_flutter(lattice, lines, scene, static=static, options=dict(scene.petsc), **dense)
     result.modes = sorted((m for v in verdicts for m in v.modes), key=lambda m: -m.sigma)
     result.eicp = [v.eicp for v in verdicts]
     result.proofs = [v.proof for v in verdicts]
@@ -214,6 +217,12 @@ def _check_solver_options(options: dict) -> None:
     petsc = options.get("options")
     if petsc is not None and not (isinstance(petsc, Mapping) and all(isinstance(k, str) for k in petsc)):
         raise ProblemError(f"options must be a dict of PETSc options (name → value), got {petsc!r}"[:300])
+
+
+def _check_dense_max(value) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ProblemError(f"flutter_dense_max must be a whole number ≥ 0 of retained DOFs, got {value!r}")
+    return int(value)
 
 
 def _check_flutter(scene: Scene, flutter) -> bool:
