@@ -134,3 +134,26 @@ def test_flutter_dense_max_buys_the_exact_bracket(monkeypatch, cli):
     with pytest.raises(SystemExit) as exit_:  # argparse's usage error
         cli("solve", SCENES / "two_layers.toml", "--no-output", "-q", "--flutter-dense-max", "-3")
     assert exit_.value.code == 2
+
+
+@settings(max_examples=12, deadline=None)
+@given(nx=st.integers(4, 10), lower=st.integers(1, 3), upper=st.integers(1, 3), mu=st.floats(0.05, 4.0),
+       shear=st.sampled_from([0.0, 0.4, -0.3]), state=st.sampled_from(["slip+", "slip-"]))
+def test_the_fastest_growth_of_qz_lies_in_the_bracket(nx, lower, upper, mu, shear, state):
+    scene = lattice(nx, (lower, upper), mu, states=state, shear=shear)
+    g = meicp.analyze(scene, flutter=True).flutter_growth
+    growths = qz_growths(scene)
+    fastest = growths.max() if growths.size else 0.0
+    assert g.lower <= fastest * (1 + 1e-9) + 1e-300
+    if g.upper is not None:
+        assert fastest <= g.upper * (1 + 1e-9)
+
+
+def test_a_defective_eigenvalue_widens_the_bracket_never_breaks_it():
+    """A Jordan block of σ = −1 (κ infinite: its disk is unbounded) beside a clear flutter
+    pair: the pair is certified, the bracket is not exact, and it still holds the pair."""
+    A = np.array([[-1.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -4.0, 1.0], [0.0, 0.0, -1.0, -4.0]])
+    got = fl.dense_flutter(A, np.eye(4))
+    pair = np.sqrt(complex(-4.0, 1.0)).real
+    assert got.flutter is True and got.growth.lower <= pair <= got.growth.upper
+    assert not got.growth.exact
