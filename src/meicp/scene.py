@@ -316,10 +316,8 @@ class Scene:
             A bad ``mu`` (naming the key, e.g. ``contact.friction``), or an ``interface``
             that names no frictional contact of this scene.
         """
-        table = self.to_dict()
-        for key in self._contact_keys("with_friction", interface, every=interface is None):
-            self._contact_table(table, key)["friction"] = _plain_number(mu)
-        return self._rebuilt(table, f"with_friction({mu!r}" + (f", interface={interface!r})" if interface else ")"))
+        return self._with_contact_value("with_friction", "friction", _plain_number(mu), repr(mu), interface,
+                                        every=interface is None)
 
     @checked_keywords()
     def with_states(self, states, *, interface: str | None = None) -> "Scene":
@@ -348,11 +346,8 @@ class Scene:
             that names no frictional contact of this scene.
         """
         value = states if isinstance(states, str) or not _iterable(states) else list(states)
-        table = self.to_dict()
-        for key in self._contact_keys("with_states", BASE if interface is None else interface, every=False):
-            self._contact_table(table, key)["states"] = value
         shown = repr(states) if isinstance(states, str) or not isinstance(value, list) else f"<{len(value)} states>"
-        return self._rebuilt(table, f"with_states({shown}" + (f", interface={interface!r})" if interface else ")"))
+        return self._with_contact_value("with_states", "states", value, shown, interface, every=False)
 
     @checked_keywords()
     def with_load(self, *, top_displacement=UNCHANGED, side_displacement=UNCHANGED, gravity=UNCHANGED) -> "Scene":
@@ -392,6 +387,15 @@ class Scene:
             else:
                 load[key] = [_plain_number(v) for v in value]
         return self._rebuilt(table, "with_load(" + ", ".join(f"{k}={v!r}" for k, v in given.items()) + ")")
+
+    def _with_contact_value(self, method: str, field: str, value, shown: str, interface, *,
+                            every: bool) -> "Scene":
+        """This scene with ``field`` set to ``value`` on the contact lines ``interface`` names
+        (the rigid base when None, unless ``every``: all of them), read back by the parser."""
+        table = self.to_dict()
+        for key in self._contact_keys(method, BASE if interface is None and not every else interface, every=every):
+            self._contact_table(table, key)[field] = value
+        return self._rebuilt(table, f"{method}({shown}" + (f", interface={interface!r})" if interface else ")"))
 
     def _contact_keys(self, method: str, interface, *, every: bool) -> list[str]:
         """The contact lines ``interface`` names: ``"base"`` (the rigid base) or the name of

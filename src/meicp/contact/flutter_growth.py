@@ -99,7 +99,7 @@ def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, mode
     upper = 0.0
     for s, r in zip(w[candidates], radius[candidates]):
         upper = max(upper, disk_growth_range(s, r)[1])
-    lower = max((disk_growth_range(m.sigma, m.radius)[0] for m in modes), default=0.0)
+    lower = _certified_lower(modes)
     n = int(np.count_nonzero(candidates))
     if n == 0:
         text = f"{how}: every eigenvalue certified real — no flutter (a proof)"
@@ -112,9 +112,14 @@ def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, mode
 def search_growth(modes: list, why_no_bound: str) -> FlutterGrowth:
     """The bracket of a search that computed part of the spectrum: the fastest certified
     mode below, no upper bound."""
-    lower = max((disk_growth_range(m.sigma, m.radius)[0] for m in modes), default=0.0)
+    lower = _certified_lower(modes)
     return FlutterGrowth(float(lower), None, f"the fastest certified mode found grows at least {lower:.6g}; "
                                       f"no upper bound: {why_no_bound}")
+
+
+def _certified_lower(modes: list) -> float:
+    """The growth rate every certified mode's disk guarantees, the largest of them."""
+    return max((disk_growth_range(m.sigma, m.radius)[0] for m in modes), default=0.0)
 
 
 def combine_growths(parts: list) -> FlutterGrowth | None:
