@@ -26,7 +26,6 @@ from .contact.instability import analyze as _analyze
 from .contact.result import InstabilityResult
 from .contact.stored import result_from_record
 from .core.comm import check_comm, world_if_none
-from .core.errors import ProblemError
 from .core.validation import checked_keywords
 from .io.results_read import read_results
 from .io.scene import as_scene
@@ -173,8 +172,6 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     """
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     scene = as_scene(scene)
-    if flutter is not None and not isinstance(flutter, bool):
-        raise ProblemError(f"flutter must be True, False or None, got {flutter!r}")
     return _critical_friction(scene, mu_max=mu_max, bisection=bisection, tol=tol, comm=world_if_none(comm),
                               flutter=flutter)
 

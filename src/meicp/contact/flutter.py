@@ -40,6 +40,7 @@ import scipy.sparse as sp
 from ..core import limits
 from ..core.comm import available_memory_on, comm_size, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
+from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
 from .flutter_growth import FlutterGrowth, combine_growths, dense_growth, search_growth
@@ -478,6 +479,13 @@ def analyze_flutter(lattice, lines, scene, *, pencil=None, static=None, options:
                     "branch has it): " + evidence)
     return FlutterVerdict(combine_branches(verdicts), modes, evidence, time.perf_counter() - t0,
                           combine_growths(growths))
+
+
+def flutter_asked(scene, flutter) -> bool:
+    """Whether to decide flutter: ``flutter`` checked (True or False; None: the scene's
+    ``[solver] flutter``), a ProblemError naming it otherwise."""
+    flag = as_flag(flutter, "flutter", allow_none=True)
+    return bool(scene.solver.flutter) if flag is None else flag
 
 
 def not_analysed(reason: str) -> FlutterVerdict:

@@ -48,7 +48,7 @@ from ..petsc.comm import index_max
 from ..petsc.stages import stage
 from ..scene import Scene
 from .divergence import all_held, divergence_of
-from .flutter import analyze_flutter, not_analysed
+from .flutter import analyze_flutter, flutter_asked, not_analysed
 from .lines import BASE, ContactState, state_names
 from .maps import grazing_cases
 from .modal import has_contact, modal_analysis
@@ -93,7 +93,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                            "(meicp.analyze also reads a scene file)")
     lam_min, tol = _check_options(scene, method or scene.solver.method, method is not None, lam_min, tol,
                                   solver_options)
-    flutter = _check_flutter(scene, flutter)
+    flutter = flutter_asked(scene, flutter)
     dense = {} if flutter_dense_max is None else {"dense_max": _check_dense_max(flutter_dense_max)}
     comm = mpi_comm(comm)
     memory, where = available_memory_on(comm)
@@ -224,10 +224,3 @@ def _check_dense_max(value) -> int:
         raise ProblemError(f"flutter_dense_max must be a whole number ≥ 0 of retained DOFs, got {value!r}")
     return int(value)
 
-
-def _check_flutter(scene: Scene, flutter) -> bool:
-    if flutter is None:
-        return scene.solver.flutter
-    if not isinstance(flutter, (bool, np.bool_)):
-        raise ProblemError(f"flutter must be True or False, got {flutter!r}")
-    return bool(flutter)

@@ -32,6 +32,7 @@ from ..api import analyze
 from ..core import limits
 from ..core.comm import mpi_comm, world_if_none
 from ..core.errors import MeicpError, ProblemError
+from ..contact.flutter import flutter_asked
 from ..core.progress import duration
 from ..io.results_records import scene_to_toml
 from .. import petsc
@@ -109,10 +110,7 @@ def sweep(scene, parameter: str = "friction", values=None, *, out=None, comm=Non
     reserved = sorted(set(analyze_options) & set(RESERVED))
     if reserved:
         raise ProblemError(f"sweep sets {reserved[0]!r} itself: pass comm=... to sweep, not to analyze")
-    if flutter is None:
-        flutter = scene.solver.flutter
-    elif not isinstance(flutter, bool):
-        raise ProblemError(f"flutter must be True or False, got {flutter!r}")
+    flutter = flutter_asked(scene, flutter)
     if per_point_comm not in PER_POINT:
         raise ProblemError(f"per_point_comm must be one of {', '.join(PER_POINT)}, got {per_point_comm!r}")
     comm = _communicator(comm)

@@ -314,15 +314,6 @@ def _dense_result(st: _DenseOnset, mu_max: float) -> Onset:
     return Onset(lower, upper, exact, text, st.mode)
 
 
-def _at_friction(scene, mu: float):
-    """``scene`` with friction μ on the base and every frictional interface (the proxy of
-    the search reads it)."""
-    contact = dataclasses.replace(scene.contact, friction=mu) if scene.contact else None
-    interfaces = tuple(dataclasses.replace(i, friction=mu) if i.kind == "frictional" else i
-                       for i in scene.interfaces)
-    return dataclasses.replace(scene, contact=contact, interfaces=interfaces)
-
-
 def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, options) -> Onset:
     """The upper end alone, by the search (it proves flutter, never its absence): the
     smallest μ tried with a certified mode in every branch, lowered by bisection on the
@@ -336,7 +327,7 @@ def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, op
                 return None
             pen = pencil_of(lattice, b.lines, (), maps=b.family.maps.with_friction(mu))
             try:
-                part = pencil_flutter(pen, _at_friction(scene, mu), comm, options=options)
+                part = pencil_flutter(pen, scene.with_friction(mu), comm, options=options)
             finally:
                 pen.destroy()
             if part.flutter is not True:

@@ -25,6 +25,7 @@ from ..problem import contact_states
 from .bisection import check_by_bisection
 from .bracket import bracket
 from .enumerated import condense_in_mu, friction_pencil, singular_message, smallest_mu
+from ..flutter import flutter_asked
 from .flutter_onset import flutter_onset
 from .result import EXACT_WIDTH, CriticalFriction, Onset
 
@@ -77,7 +78,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     """
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     comm = mpi_comm(comm)
-    flutter = _check_flutter(scene, flutter)
+    flutter = flutter_asked(scene, flutter)
     lattice, lines = _friction_states(scene)
     divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm)
     if not flutter:
@@ -161,12 +162,6 @@ def friction_pencils(scene):
     return out
 
 
-def _check_flutter(scene: Scene, flutter) -> bool:
-    if flutter is None:
-        return bool(scene.solver.flutter)
-    if not isinstance(flutter, (bool, np.bool_)):
-        raise ProblemError(f"flutter must be True or False, got {flutter!r}")
-    return bool(flutter)
 
 
 def _friction_states(scene) -> tuple[LatticeMatrices, tuple]:
