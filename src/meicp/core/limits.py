@@ -83,6 +83,8 @@ FLUTTER_ONSET_SEARCHES = 6
 STATIC_MAX_CONTACTS = 2000
 #: ``formulation="auto"`` uses the condensed (dense) path up to this many contacts, else mixed
 STATIC_AUTO_CONDENSED_LIMIT = 200
+#: most contacts for the Schur formulation (its dense compliance G has (2·contacts)² entries)
+STATIC_SCHUR_MAX_CONTACTS = 4000
 #: largest LCP for which the condensed path falls back to dense Lemke when its choice failed
 STATIC_LEMKE_LIMIT = 4 * STATIC_MAX_CONTACTS
 

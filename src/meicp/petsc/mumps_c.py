@@ -242,22 +242,25 @@ class SchurSeries(_Instance):
     #: of :func:`meicp.petsc.schur.schur_series` has neither)
     interior = True
 
-    def __init__(self, comm, H0: sp.csr_matrix, H1: sp.csr_matrix, rows: np.ndarray, *, defaults: dict | None = None,
-                 icntl: dict | None = None, cntl: dict | None = None):
+    def __init__(self, comm, H0: sp.csr_matrix, H1: sp.csr_matrix | None, rows: np.ndarray, *,
+                 defaults: dict | None = None, icntl: dict | None = None, cntl: dict | None = None,
+                 what: str = "Schur complement of the condensation", option: str = "-meicp_schur_mat_mumps_"):
         # (the Schur block is the root of the elimination tree and is not factored: no ScaLAPACK
         # root whose pivots INFOG(12) would miss)
-        super().__init__(comm, "d", 2, {19: 1, **(defaults or {})}, icntl, cntl,
-                         "Schur complement of the condensation", "-meicp_schur_mat_mumps_")
-        H0, H1 = sp.csr_matrix(H0), sp.csr_matrix(H1)
-        if H0.shape != H1.shape or not (np.array_equal(H0.indptr, H1.indptr)
-                                        and np.array_equal(H0.indices, H1.indices)):
+        super().__init__(comm, "d", 2, {19: 1, **(defaults or {})}, icntl, cntl, what, option)
+        # H1 None: the constant matrix H0 (one factorisation, no second copy of its values)
+        H0 = sp.csr_matrix(H0)
+        H1 = None if H1 is None else sp.csr_matrix(H1)
+        if H1 is not None and (H0.shape != H1.shape or not (np.array_equal(H0.indptr, H1.indptr)
+                                                            and np.array_equal(H0.indices, H1.indices))):
             self.destroy()
             raise ValueError("SchurSeries needs H₀ and H₁ on one pattern")
         n = H0.shape[0]
         lo, hi = (0, n) if comm is None else ownership(n, comm.Get_rank(), comm.Get_size())
-        local0, local1 = H0[lo:hi].tocoo(), H1[lo:hi].tocoo()
+        local0 = H0[lo:hi].tocoo()
         upper = local0.col >= local0.row + lo  # a symmetric matrix gives one triangle (MUMPS sums both)
-        self._h0, self._h1 = local0.data[upper].astype(float), local1.data[upper].astype(float)
+        self._h0 = local0.data[upper].astype(float)
+        self._h1 = None if H1 is None else H1[lo:hi].tocoo().data[upper].astype(float)
         rows_upper, cols_upper = local0.row[upper] + lo, local0.col[upper]
         self._rows(np.ascontiguousarray(rows_upper + 1, dtype=np.int32),
                    np.ascontiguousarray(cols_upper + 1, dtype=np.int32), self._h0.copy(), n)
@@ -296,8 +299,11 @@ class SchurSeries(_Instance):
         inertia that is a proof up to rounding; its null count then includes the pivots MUMPS
         forced to ±eps next to the Schur block (INFOG(25)), which a proof cannot accept either.
         Collective."""
-        np.multiply(self._h1, sigma, out=self._a)
-        self._a += self._h0
+        if self._h1 is None:
+            self._a[:] = self._h0
+        else:
+            np.multiply(self._h1, sigma, out=self._a)
+            self._a += self._h0
         if diagonal is not None:
             diagonal = np.asarray(diagonal, dtype=float)
             mine = np.zeros(self._hi - self._lo, dtype=bool)

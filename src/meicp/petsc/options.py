@@ -41,6 +41,9 @@ INERTIA = "meicp_inertia_"
 STATIC = "meicp_static_"
 #: MUMPS LU that polishes the static equilibrium's answer
 STATIC_POLISH = STATIC + "polish_"
+#: MUMPS LDLᵀ of the static equilibrium's bordered stiffness and its Schur complement onto
+#: the contact unknowns (``formulation="schur"``): ``mat_mumps_icntl_<k>`` / ``mat_mumps_cntl_<k>``
+STATIC_SCHUR = STATIC + "schur_"
 #: SNES VI (``newton``) and TAO (``tao``) of ``solve_lcp``
 LCP = "meicp_lcp_"
 #: MUMPS LU solves of :func:`meicp.petsc.lcp.lu_solve`
@@ -63,6 +66,8 @@ PREFIXES = {
     INERTIA: "MUMPS LDLᵀ (KSP/PC) whose inertia proves a symmetric pencil stable",
     STATIC: "SNES VI of the static frictional equilibrium (states = \"solve\")",
     STATIC_POLISH: "MUMPS LU polishing the static equilibrium",
+    STATIC_SCHUR: ("MUMPS LDLᵀ + Schur complement of the static equilibrium condensed onto its contacts "
+                   "(formulation schur): mat_mumps_icntl_<k> / mat_mumps_cntl_<k>"),
     LCP: "SNES VI / TAO of meicp lcp --method newton | tao",
     LU: "MUMPS LU solves (KSP/PC)",
     EICP_VI: "SNES VI of the semismooth EiCP method",

@@ -14,10 +14,11 @@ from .condensed import solve_condensed
 from .data import static_data
 from .mixed import solve_mixed
 from .result import StaticResult
+from .schur import solve_schur
 
 #: default relative tolerance of the state classification (docs/static-equilibrium.md)
 TOL = 1e-9
-FORMULATIONS = ("auto", "condensed", "mixed")
+FORMULATIONS = ("auto", "condensed", "schur", "mixed")
 
 
 def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "auto",
@@ -37,10 +38,15 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     allow_floating: condense rigid components held by contact instead of raising.
 
     formulation: ``"condensed"`` (dense compliance, Lemke; classifies the LCP matrix),
-    ``"mixed"`` (sparse, displacements kept, PETSc SNES VI + certified polish; no matrix
+    ``"schur"`` (one MUMPS factorisation of the bordered stiffness, distributed over ``comm``,
+    its Schur complement G; the frictional problem of order 2 per contact on G by NSGS and an
+    exact active-set polish, certified on the sparse problem; options under
+    ``-meicp_static_schur_``; needs K_ff invertible), ``"mixed"`` (sparse, displacements kept, PETSc SNES VI + certified polish; no matrix
     classes; options ``petsc_options`` under ``-meicp_static_``) or ``"auto"`` (condensed up
-    to :data:`limits.STATIC_AUTO_CONDENSED_LIMIT` contacts, else mixed).  comm: with several ranks the
-    mixed formulation's PETSc solves are distributed over it (collective then: every rank
+    to :data:`limits.STATIC_AUTO_CONDENSED_LIMIT` contacts, then schur up to
+    :data:`limits.STATIC_SCHUR_MAX_CONTACTS`, else mixed; mixed too, with a note saying why, when a rigid
+    component floats on its contacts).  comm: with several ranks the schur and
+    mixed formulations' PETSc solves are distributed over it (collective then: every rank
     calls with the same scene); the condensed formulation ignores it.
 
     lines: the scene's contact lines (:func:`~meicp.contact.lines.contact_lines`) when the
@@ -73,9 +79,15 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
     nsets = int(has_base) + len(scene.frictional_interfaces())
     nc_total = nsets * scene.nx
     if formulation not in FORMULATIONS:
-        raise ProblemError(f"formulation must be 'auto', 'condensed' or 'mixed', got {formulation!r}")
-    if formulation == "auto":
-        formulation = "condensed" if nc_total <= limits.STATIC_AUTO_CONDENSED_LIMIT else "mixed"
+        raise ProblemError(f"formulation must be 'auto', 'condensed', 'schur' or 'mixed', got {formulation!r}")
+    auto = formulation == "auto"
+    if auto:
+        formulation = ("condensed" if nc_total <= limits.STATIC_AUTO_CONDENSED_LIMIT else
+                       "schur" if nc_total <= limits.STATIC_SCHUR_MAX_CONTACTS else "mixed")
+    if formulation == "schur" and nc_total > limits.STATIC_SCHUR_MAX_CONTACTS:
+        raise ProblemError(f"static equilibrium: {nc_total} contacts exceed the Schur formulation's limit of "
+                           f"{limits.STATIC_SCHUR_MAX_CONTACTS} (its dense compliance has (2·contacts)² "
+                           "entries); use formulation=\"mixed\" (the sparse mixed formulation)")
     if formulation == "condensed" and nc_total > limits.STATIC_MAX_CONTACTS:
         raise ProblemError(f"static equilibrium: {nc_total} contacts exceed the condensed dense "
                            f"formulation's limit of {limits.STATIC_MAX_CONTACTS}; use formulation=\"mixed\" (the "
@@ -85,6 +97,16 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
         raise ProblemError("model must be the LatticeModel of this scene")
     data = static_data(scene, model, tol=tol, allow_floating=allow_floating, timings=timings, lines=lines,
                        stiffness=stiffness)
+    if formulation == "schur" and data.rigid_modes:
+        why = (f"{data.rigid_modes} rigid-body mode(s) not held by the Dirichlet boundary (K_ff singular): the "
+               "Schur formulation needs K_ff invertible")
+        if not auto:
+            raise ProblemError(f"static equilibrium: formulation=\"schur\": {why}; use formulation=\"mixed\" "
+                               "or \"condensed\"")
+        formulation = "mixed"
+        data.notes.append(f"formulation auto: mixed, not schur — {why}")
+    if formulation == "schur":
+        return solve_schur(data, comm=comm, timings=timings, t_start=t_start, petsc_options=petsc_options)
     if formulation == "mixed":
         return solve_mixed(data, comm=comm, petsc_options=petsc_options, timings=timings, t_start=t_start)
     return solve_condensed(data, method=method, lcp_tol=lcp_tol, classify_limit=classify_limit,
