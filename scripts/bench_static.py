@@ -101,7 +101,8 @@ def chart(args):
         if not sel:
             continue
         x = [int(r["dofs"]) for r in sel]
-        axes[0].plot(x, [float(r["time_ratio"]) for r in sel], style, label=formulation)
+        timed = [r for r in sel if r["time_ratio"]]  # a run stopped before the end has no time
+        axes[0].plot([int(r["dofs"]) for r in timed], [float(r["time_ratio"]) for r in timed], style, label=formulation)
         axes[1].plot(x, [float(r["memory_ratio"]) for r in sel], style, label=formulation)
     for ax, what, target in ((axes[0], "static time / one eigen-solve", 1.5),
                              (axes[1], "static peak memory / eigen-solve's (per rank)", 1.0)):
