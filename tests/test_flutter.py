@@ -398,9 +398,12 @@ def test_no_flutter_flag_takes_no_value():
     assert out.returncode == 2 and "--no-flutter" in out.stderr and "Traceback" not in out.stderr
 
 
-def test_search_without_a_proxy_on_a_frictional_interface():
-    """B not diagonal, no strip proxy: λ-line targets; what it certifies is QZ's."""
-    scene = meicp.load_scene(SCENES / "frictional_interface.toml")
+def test_search_without_a_proxy_on_a_frictional_interface_over_a_rough_base():
+    """Two sliding contact lines (a rough base and a frictional interface): no strip proxy,
+    λ-line targets; what it certifies is QZ's."""
+    from meicp.examples import two_layer_scene
+    scene = two_layer_scene(24, (3, 3), mu=1.0, interface={"kind": "frictional", "friction": 0.5,
+                                                            "states": "slip+"})
     with pencil(scene) as pen:
         got = fl.pencil_flutter(pen, scene, dense_max=0)
         ref = fl.pencil_flutter(pen, scene)
@@ -465,3 +468,51 @@ def test_complex_and_real_form_factors_return_the_same_pairs():
     nearest = sorted(ref, key=lambda p: abs(p[0] - tau))[:2]
     for sigma, _, _ in nearest:
         assert min(abs(sigma - g[0]) for g in got) <= 1e-10 * abs(sigma)
+
+
+def _interface_scene(nx, rows, mu, states="slip+"):
+    from meicp.examples import two_layer_scene
+    return two_layer_scene(nx, rows, bottom="fixed", stiffness=(1.0, 6.0),
+                           interface={"kind": "frictional", "friction": mu, "states": states})
+
+
+def test_sliding_window_picks_the_middlemost_window_with_most_slips():
+    states = ["stick"] * 10 + ["slip+"] * 4 + ["stick"] * 6 + ["slip-"] * 5 + ["stick"] * 5
+    assert fl.sliding_window(states, 5) == 20
+    assert fl.sliding_window(["slip+"] * 30, 10) == 10
+    assert fl.sliding_window(["stick"] * 9, 3) == 3
+
+
+def test_interface_proxy_targets_give_certified_modes_and_only_a_lower_bound():
+    """A frictional interface has its own strip proxy (rows on both sides of it): the search
+    from its targets certifies modes that QZ finds on the whole pencil, and its fastest is
+    reported as a lower bound of the fastest growth (here it is slower than QZ's fastest)."""
+    scene = _interface_scene(48, (5, 5), 1.0)
+    with pencil(scene) as pen:
+        ref = fl.pencil_flutter(pen, scene)
+        targets = fl.proxy_targets(scene, None, 3, lines=pen.lines)
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+    assert ref.complete and len(targets) == 3 and "contact-strip proxy" in got.evidence
+    assert got.flutter is True and got.modes
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
+    assert got.growth.upper is None and not got.growth.exact
+    assert got.growth.lower <= ref.growth.lower * (1 + 1e-12)
+
+
+def test_interface_proxy_is_cut_where_the_interface_slides():
+    """The proxy keeps PROXY_ROWS // 2 rows on each side (the cuts fixed) and the columns
+    where most contacts slip; a scene with a rough base as well has no interface proxy."""
+    states = ["stick"] * 40 + ["slip-"] * 30 + ["stick"] * 30
+    scene = _interface_scene(100, (6, 7), 0.5, states=states)
+    from meicp.contact.lines import contact_lines
+    from meicp.lattice.model import LatticeModel
+    line, = contact_lines(scene, LatticeModel(scene))
+    proxy = fl.interface_proxy(scene, line)
+    assert proxy.nx == fl.PROXY_NX and [layer.rows for layer in proxy.layers] == [fl.PROXY_ROWS // 2] * 2
+    assert proxy.boundary.bottom == "fixed" and proxy.boundary.top == "fixed"
+    itf, = (i for i in proxy.interfaces if i.kind == "frictional")
+    assert itf.index == 0 and itf.states.count("slip-") == 30 and len(itf.states) == fl.PROXY_NX
+    from meicp.examples import two_layer_scene
+    based = two_layer_scene(100, (6, 7), mu=1.0, interface={"kind": "frictional", "friction": 0.5, "states": states})
+    lines = contact_lines(based, LatticeModel(based))
+    assert fl.interface_proxy(based, lines[1]) is None

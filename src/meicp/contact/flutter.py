@@ -368,10 +368,83 @@ def strip_proxy(scene, base_states):
         contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
 
 
-def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[complex]:
+def sliding_window(states, width: int) -> int:
+    """The first column of the ``width`` consecutive contacts with the most slipping ones (the
+    middlemost such window): where a proxy of a partly sticking contact line is cut."""
+    sliding = np.array([ContactState(s).slip_sign != 0 for s in states], dtype=int)
+    counts = np.convolve(sliding, np.ones(width, dtype=int), mode="valid")
+    best = np.flatnonzero(counts == counts.max())
+    middle = (len(states) - width) / 2
+    return int(best[np.argmin(np.abs(best - middle))])
+
+
+def interface_proxy(scene, line):
+    """The interface-strip proxy of a frictional interface ``line`` (states resolved): the
+    :data:`PROXY_ROWS` // 2 rows on each side of it (a cut held fixed) and :data:`PROXY_NX`
+    columns where most of its contacts slip, with their states.  None when the scene has a
+    rigid base contact, an embedded band, or another frictional interface within those rows."""
+    if scene.contact is not None or scene.embedded:
+        return None
+    index = next(i.index for i in scene.interfaces if i.kind == "frictional" and i.below == line.name)
+    half = PROXY_ROWS // 2
+    below, left = [], half
+    for layer in reversed(scene.layers[:index + 1]):
+        if left <= 0:
+            break
+        below.insert(0, dataclasses.replace(layer, rows=min(layer.rows, left)))
+        left -= below[0].rows
+    above, left = [], half
+    for layer in scene.layers[index + 1:]:
+        if left <= 0:
+            break
+        above.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
+        left -= above[-1].rows
+    first = index + 1 - len(below)  # the scene's index of the proxy's first layer
+    kept = tuple(below + above)
+    interfaces = tuple(dataclasses.replace(i, index=i.index - first) for i in scene.interfaces
+                       if first <= i.index < first + len(kept) - 1)
+    if sum(i.kind == "frictional" for i in interfaces) != 1:
+        return None
+    nx = min(scene.nx, PROXY_NX)
+    start = sliding_window(line.states, nx)
+    states = tuple(state_names(line.states[start:start + nx]))
+    interfaces = tuple(dataclasses.replace(i, states=states) if i.index == index - first else i for i in interfaces)
+    rows_below = sum(layer.rows for layer in below)
+    cut_below = rows_below < sum(layer.rows for layer in scene.layers[:index + 1])
+    cut_above = sum(layer.rows for layer in above) < sum(layer.rows for layer in scene.layers[index + 1:])
+    boundary = dataclasses.replace(scene.boundary, bottom="fixed" if cut_below else scene.boundary.bottom,
+                                   top="fixed" if cut_above else scene.boundary.top)
+    return dataclasses.replace(scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=kept,
+                               interfaces=interfaces, boundary=boundary, load=None)
+
+
+def _proxy_of(scene, lines):
+    """(proxy scene, its rows next to the contact) for the one sliding contact line of a scene,
+    or (None, None): the base strip, else the strip around the one sliding frictional
+    interface."""
+    sliding = [line for line in lines if any(ContactState(s).slip_sign for s in line.states)]
+    base = next((line for line in lines if line.name == BASE), None)
+    if base is not None:
+        return strip_proxy(scene, list(base.states)), np.arange(PROXY_NEAR_ROWS)
+    if len(sliding) != 1:
+        return None, None
+    proxy = interface_proxy(scene, sliding[0])
+    if proxy is None:
+        return None, None
+    index = next(i.index for i in proxy.interfaces if i.kind == "frictional")
+    top_of_lower = sum(layer.rows for layer in proxy.layers[:index + 1])
+    return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
+
+
+def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS, *, lines=None) -> list[complex]:
     """Up to ``count`` targets: σ of the proxy's fastest contact-localised flutter modes, at
-    least 0.1|σ| apart (all its modes when none is localised); [] without a proxy."""
-    proxy = strip_proxy(scene, base_states)
+    least 0.1|σ| apart (all its modes when none is localised); [] without a proxy.  ``lines``:
+    the scene's resolved contact lines (then ``base_states`` is ignored), for the proxy of a
+    frictional interface."""
+    if lines is None:
+        proxy, near = strip_proxy(scene, base_states), np.arange(PROXY_NEAR_ROWS)
+    else:
+        proxy, near = _proxy_of(scene, lines)
     if proxy is None:
         return []
     with pencil(proxy) as pen:  # a lattice of its own, PROXY_NX × PROXY_ROWS, serial
@@ -380,7 +453,7 @@ def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS) -> list[compl
 
     def near_contact(x):
         energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))
-        return energy[:PROXY_NEAR_ROWS].sum() / energy.sum()
+        return energy[near].sum() / energy.sum()
 
     candidates = [m for m in found.modes if near_contact(m.x) >= PROXY_LOCALISED] or found.modes
     targets = []
@@ -417,9 +490,8 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
             growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
     why = ""
     if targets is None:
-        base = next((line.states for line in pen.lines if line.name == BASE), ())
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
-        targets = proxy_targets(scene, list(base), count) if base else []
+        targets = proxy_targets(scene, None, count, lines=pen.lines)
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
         if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM:
             moved = [off_cluster(t, 0) for t in targets]
