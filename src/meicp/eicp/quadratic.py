@@ -81,17 +81,31 @@ def companion(A, B, D, *, second: bool = False):
     return np.block([[Z, I], [A, -D]]), np.block([[I, Z], [Z, B]])
 
 
-def _eig(A, B, D, *, left: bool = False):
+#: B_RR with a larger condition estimate is not inverted: QZ on the companion pair instead
+COND_LIMIT = 1e8
+
+
+def _eig(A, B, D, *, left: bool = False, vectors: bool = True):
     """Eigenvalues μ (inf where infinite), right eigenvectors x (the quadratic's: first block
-    of z), and when ``left`` the rounding radius of each μ, of ``μ²B + μD − A`` (scaled data).
-    B diagonal and positive: the standard eigenproblem of L1⁻¹L0; else QZ."""
+    of z; None unless ``vectors``), and when ``left`` the rounding radius of each μ, of
+    ``μ²B + μD − A`` (scaled data).  B diagonal and positive: the standard eigenproblem of
+    L1⁻¹L0; B well conditioned (eigenvalues only): the same through a solve with B; else QZ."""
     n = A.shape[0]
     d = np.diag(B)
-    L0, L1 = companion(A, B, D)
     eps = np.finfo(float).eps
-    if np.all(d > 0) and np.count_nonzero(B) == np.count_nonzero(d):
+    diagonal = np.all(d > 0) and np.count_nonzero(B) == np.count_nonzero(d)
+    if not (vectors or left) and not diagonal:
+        lu = sl.lu_factor(B, check_finite=False)
+        rcond, _ = sl.lapack.dgecon(lu[0], _norm1(B), norm="1")
+        if rcond * COND_LIMIT > 1:
+            S = np.block([[np.zeros((n, n)), np.eye(n)], [sl.lu_solve(lu, np.hstack([A, -D]), check_finite=False)]])
+            return np.linalg.eigvals(S), None, None
+    L0, L1 = companion(A, B, D)
+    if diagonal:
         inv = np.concatenate([np.ones(n), 1.0 / d])
         S = inv[:, None] * L0
+        if not (vectors or left):
+            return np.linalg.eigvals(S), None, None
         out = sl.eig(S, left=left, right=True)
         mu, VR = out[0], out[-1]
         radius = None
@@ -101,10 +115,13 @@ def _eig(A, B, D, *, left: bool = False):
                      / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), VR)), 1e-300))
             radius = 2 * n * (eps / 2) * (_norm1(S) + np.abs(mu)) * kappa
         return mu, VR[:n], radius
-    out = sl.eig(L0, L1, left=left, right=True, homogeneous_eigvals=True)
-    (alpha, beta), VR = out[0], out[-1]
+    out = sl.eig(L0, L1, left=left, right=vectors or left, homogeneous_eigvals=True)
+    alpha, beta = out[0] if (vectors or left) else out
     infinite = np.abs(beta) * _norm1(L0) <= 2 * n * eps * np.abs(alpha) * _norm1(L1)
     mu = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
+    if not (vectors or left):
+        return mu, None, None
+    VR = out[-1]
     radius = None
     if left:
         VL = out[1]
@@ -247,7 +264,7 @@ def solve_quadratic_eicp(A, B, D, J, *, lam_min: float = 0.0, tol: float = DEFAU
             if R.size == 0:
                 continue
             ix = np.ix_(R, R)
-            mu = _eig(As[ix], Bs[ix], Ds[ix])[0]
+            mu = _eig(As[ix], Bs[ix], Ds[ix], vectors=False)[0]
             near = np.isfinite(mu) & (np.abs(mu.imag) <= REAL_SLACK * np.maximum(1.0, np.abs(mu)))
             for lam in _distinct(sc.s * mu[near].real):
                 if lam < floor:
