@@ -92,11 +92,13 @@ def damping_matrix(pen) -> sp.csr_matrix:
 
 
 def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Dense A, B, D on every rank (collective: a distributed pencil is gathered)."""
     return to_dense(pen.A), to_dense(pen.B), damping_matrix(pen).toarray()
 
 
 def _on_root(comm, compute):
-    """``compute()`` on rank 0, broadcast (the dense paths are serial)."""
+    """``compute()`` on rank 0, broadcast (the dense paths are serial; ``compute`` must not be
+    collective)."""
     comm = mpi_comm(comm)
     if comm is None or comm_size(comm) == 1:
         return compute()
@@ -124,11 +126,8 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
                            "yet (docs/damping.md)")
     max_j = options.get("max_j") if method == "enumerate" else None
 
-    def compute():
-        A, B, D = _dense(pen)
-        return solve_quadratic_eicp(A, B, D, red.J, lam_min=0.0, tol=tol, max_j=max_j)
-
-    res = _on_root(comm, compute)
+    A, B, D = _dense(pen)  # collective when the pencil is distributed
+    res = _on_root(comm, lambda: solve_quadratic_eicp(A, B, D, red.J, lam_min=0.0, tol=tol, max_j=max_j))
     found = [mode_of(SimpleNamespace(lam=s.sigma, x=s.x, support=s.support, residual=s.residual), red)
              for s in res.solutions]
     listed = [m for m in found if lam_min == 0 or m.sigma >= lam_min]
@@ -163,7 +162,8 @@ def damped_flutter(pen, comm=None, *, dense_max: int | None = None) -> PencilFlu
         raise ProblemError(f"damped flutter with {n} retained DOFs is past the dense limit of {limit} "
                            "(limits.FLUTTER_DENSE_MAX, or flutter_dense_max): the damped flutter search at scale "
                            "(SLEPc PEP) is not supported yet (docs/damping.md)")
-    return _on_root(comm, lambda: classify_spectrum(quadratic_spectrum(*_dense(pen))))
+    A, B, D = _dense(pen)  # collective when the pencil is distributed
+    return _on_root(comm, lambda: classify_spectrum(quadratic_spectrum(A, B, D)))
 
 
 def classify_spectrum(spec: QuadraticSpectrum, residual_tol: float = RESIDUAL_TOL) -> PencilFlutter:
