@@ -2,10 +2,12 @@
 the dense quadratic references (divergence by enumeration of supports, flutter by the
 companion linearisation) against independent checks, and the paths that refuse damping."""
 
+import dataclasses
+import itertools
+
 import numpy as np
 import pytest
 import scipy.linalg as sl
-import scipy.sparse as sp
 from hypothesis import given, settings, strategies as st
 
 import meicp
@@ -58,7 +60,6 @@ def test_damping_keys_are_read_and_absent_ones_leave_the_scene_undamped():
 
 
 def dataclass_without_source(scene):
-    import dataclasses
     return dataclasses.replace(scene, source="<dict>")
 
 
@@ -193,7 +194,7 @@ def _brute_force(A, B, D, J):
     F = np.setdiff1d(np.arange(n), J)
     robust, loose = [], []
     for k in range(len(J) + 1):
-        for S in __import__("itertools").combinations(J, k):
+        for S in itertools.combinations(J, k):
             R = np.sort(np.concatenate([F, np.array(S, dtype=int)])).astype(int)
             if R.size == 0:
                 continue
