@@ -334,6 +334,25 @@ def test_vanishing_damping_gives_the_undamped_answers(scene):
     assert [m.sigma for m in r.flutter_modes] == pytest.approx([m.sigma for m in today.flutter_modes], rel=1e-5)
 
 
+def test_damping_can_raise_or_lower_the_flutter_threshold():
+    """Both effects of issue 31, computed: on the small frictional interface at μ = 0.855 the
+    undamped sliding pencil is proved to grow at most 5e-7 (undecided: near-degenerate
+    modes) while η = 0.02 in both layers gives a certified flutter mode growing 0.00198 (the
+    destabilisation paradox: measured onsets 0.8687 undamped, 0.8431 damped, docs/damping.md);
+    on two_layers.toml at μ = 1 the undamped flutter (growth 0.0077) is gone with η = 0.02
+    (onsets 0.6308, 1.3845)."""
+    u = meicp.analyze(INTERFACE.with_friction(0.855))
+    d = meicp.analyze(damped(INTERFACE, eta=(0.02, 0.02)).with_friction(0.855))
+    assert u.flutter is not True and u.flutter_growth.upper < 1e-6
+    assert d.flutter is True and d.flutter_growth.exact and d.flutter_growth.lower > 1e-3
+    u = meicp.analyze(TWO_LAYERS.with_friction(1.0))
+    d = meicp.analyze(damped(TWO_LAYERS, eta=(0.02, 0.02)).with_friction(1.0))
+    assert u.flutter is True and u.flutter_growth.lower > 5e-3
+    assert d.flutter is False and d.flutter_growth.upper == 0.0
+    # and the divergence growth rate rises with the viscosity of the base layer
+    assert meicp.analyze(damped(TWO_LAYERS, eta=(0.1, 0.01)), flutter=False).modes[0].growth_rate > 0.586
+
+
 def test_singular_damping_one_layer_without_viscosity_is_decided():
     r = meicp.analyze(damped(TWO_LAYERS, eta=(0.0, 0.05)))
     assert r.divergence is True and r.flutter is not None
