@@ -139,7 +139,7 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
         return DivergenceVerdict(modes, stable, evidence, res, DivergenceProof(test, statement, res.supports))
 
     if found:
-        growth = ", ".join(f"{s.lam:.6g}" for s in res.solutions[:3])
+        growth = ", ".join(f"{max(s.lam, 0.0):.6g}" for s in res.solutions[:3])  # 0 within rounding: ≥ 0
         return verdict(listed, False, f"{head}: {len(found)} damped divergence mode(s), growth rate λ = {growth}"
                        f"{note}", "quadratic-enumerate", "certified mode(s)")
     if res.status == "no_solution":

@@ -336,6 +336,8 @@ class InstabilityResult(Result):
             st = list(self.interface_states.get(itf.below) or [])
             rows.append((f"interface {itf.below}", f"{scene.nx} contact pairs, μ = {itf.friction:g}: "
                                                    f"{states_compact(st)}{_strip(st)}"))
+        if self.damping is not None:
+            rows.append(("damping", self.damping.describe()))
         verdict = self.verdict
         if not self.success:
             verdict = f"FAILED ({self.status})" + ("" if self.stable is None else f", last verdict {verdict}")
