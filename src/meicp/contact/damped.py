@@ -1,4 +1,4 @@
-"""Damped lattices (docs/damping.md, DESIGN §4 "Damping"): the dense references of the
+"""Damped lattices (docs/damping.md, docs/design.md §7.4): the dense references of the
 damped divergence and flutter verdicts, and the refusal of every path not built for damping.
 
 With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``), modes
