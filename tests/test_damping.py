@@ -271,6 +271,18 @@ def test_overdamped_pencil_has_only_real_eigenvalues_and_no_flutter():
     assert verdict.counts["certified_real"] + verdict.counts["decaying"] == 2 * n
 
 
+def test_an_undamped_oscillation_on_the_imaginary_axis_is_undecided_not_stable():
+    """D = 0 with symmetric A ≺ 0, B = I: every λ = ±iω has Re λ = 0 up to rounding — neither
+    growing nor decaying can be proved by the quadratic path, so flutter is undecided (the
+    undamped path proves it absent through real σ; the damped one must not claim it)."""
+    rng = np.random.default_rng(11)
+    G = rng.normal(size=(5, 5))
+    A = -(G @ G.T + np.eye(5))
+    verdict = classify_spectrum(quadratic_spectrum(A, np.eye(5), np.zeros((5, 5))))
+    assert verdict.flutter is None and not verdict.modes
+    assert verdict.counts["borderline"] == 10 and 0 < verdict.growth.upper < 1e-12
+
+
 # ------------------------------------------------------------------------------- analyze
 
 
