@@ -79,13 +79,13 @@ ALSO_DROP = {("interfaces", "kind"): ("friction",), ("boundary", "bottom"): ("co
 def _resolved(table: str, key: str):
     """The value the parser gives ``table.key`` when the scene leaves it out."""
     data = {name: (list(value) if isinstance(value, list) else dict(value)) for name, value in BASE.items()}
-    entry = dict(MINIMAL.get(table, data.get(table, {})))
+    entry = dict(MINIMAL.get(table) or (data["layers"][0] if table == "layers" else data.get(table, {})))
     for dropped in (key, *ALSO_DROP.get((table, key), ())):
         entry.pop(dropped, None)
         data.pop(dropped, None)
     if table == "":
         return getattr(scene_from_dict(data), key)
-    data[table] = [entry] if table in MINIMAL else entry
+    data[table] = [entry] + data[table][1:] if table == "layers" else [entry] if table in MINIMAL else entry
     value = getattr(scene_from_dict(data), table)
     return getattr(value[0] if isinstance(value, tuple) else value, key)
 

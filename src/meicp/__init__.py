@@ -26,12 +26,12 @@ from .io.scene import load_scene  # noqa: E402
 from .lattice.model import LatticeModel  # noqa: E402
 from .contact.result import FlutterMode, InstabilityResult, Mode  # noqa: E402
 from .contact.critical_friction import CriticalFriction  # noqa: E402
-from .api import analyze, assemble, critical_friction, load_results  # noqa: E402
+from .api import analyze, assemble, assemble_damping, critical_friction, load_results  # noqa: E402
 from .study import SweepResult, sweep  # noqa: E402
 
 __all__ = ["__version__", "MeicpError", "ProblemError", "ConvergenceError", "SolverNotFound", "Result", "solve_lcp", "LCPResult",
            "classify", "MatrixClasses", "game_value", "GameValue",
-           "load_scene", "Scene", "assemble", "LatticeModel",
+           "load_scene", "Scene", "assemble", "assemble_damping", "LatticeModel",
            "solve_eicp", "EiCPResult", "EiCPSolution",
            "analyze", "critical_friction", "load_results", "InstabilityResult", "Mode", "FlutterMode",
            "CriticalFriction", "sweep", "SweepResult"]

@@ -1,5 +1,5 @@
 """The public entry points that take a scene: :func:`analyze`, :func:`critical_friction`,
-:func:`assemble`; and :func:`load_results`, which reads a results.h5 back.
+:func:`assemble`, :func:`assemble_damping`; and :func:`load_results`, which reads a results.h5 back.
 
 A scene is taken in any of its forms (:func:`meicp.io.scene.as_scene`): a
 :class:`~meicp.scene.Scene`, the path of a scene file, a dict (the parsed table) or TOML text.
@@ -31,6 +31,7 @@ from .io.results_read import read_results
 from .io.scene import as_scene
 from .lattice.model import LatticeModel
 from .petsc.assembly import assemble as _assemble
+from .petsc.assembly import assemble_damping as _assemble_damping
 
 
 @checked_keywords(refused=REFUSED_OPTIONS)
@@ -203,6 +204,35 @@ def assemble(scene, comm=None):
     """
     check_comm(comm)
     return _assemble(scene if isinstance(scene, LatticeModel) else as_scene(scene), comm)
+
+
+@checked_keywords()
+def assemble_damping(scene, comm=None):
+    """The lattice's damping matrix C in natural numbering (docs/damping.md): assembled
+    exactly like K with each bond's viscosity η in place of its stiffness (a bond joining
+    two materials gets the mean, or its bonded interface's own ``viscosity``), plus
+    ``[damping] mass`` · M.  Without damping keys it is zero (K's pattern, explicit zeros).
+
+    Parameters
+    ----------
+    scene : Scene, LatticeModel, str, os.PathLike, dict or str
+        As for :func:`assemble`.
+    comm : None, mpi4py or PETSc communicator
+        None: a SciPy CSR matrix on this process; a communicator: a PETSc Mat distributed
+        on it as K is (collective; the caller destroys it).
+
+    Returns
+    -------
+    C
+        A SciPy CSR matrix or a PETSc Mat, symmetric positive semidefinite.
+
+    Raises
+    ------
+    ProblemError
+        A bad scene (naming its key) or a ``comm`` that is not a communicator.
+    """
+    check_comm(comm)
+    return _assemble_damping(scene if isinstance(scene, LatticeModel) else as_scene(scene), comm)
 
 
 @checked_keywords()

@@ -122,6 +122,7 @@ class Layer:
     rows: int
     stiffness: float
     density: float
+    viscosity: float | None = None
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,8 @@ class Embedded:
     Rows ``row .. row+rows-1`` counted from the host's bottom row, columns
     ``column .. column+columns-1``.  ``stiffness`` is the bond stiffness inside the band,
     ``interface_stiffness`` (resolved) the stiffness of bonds between band and host.
+    ``viscosity``: the dashpot of the bonds inside the band (None: none); a bond between band
+    and host gets the mean of the two viscosities.
     """
 
     name: str
@@ -142,6 +145,7 @@ class Embedded:
     column: int = 0
     columns: int = 0
     interface_stiffness: float = 0.0
+    viscosity: float | None = None
 
 
 @dataclass(frozen=True)
@@ -167,7 +171,8 @@ class Interface:
     ``kind`` is ``bonded`` (bonds with ``stiffness`` cross it) or ``frictional`` (no bonds;
     the top row of the lower layer and the bottom row of the upper layer are in Coulomb
     contact with coefficient ``friction``, node states ``states``, docs/design.md §6.1 (b)).
-    ``declared`` tells whether the scene file has an entry for it.
+    ``viscosity``: bonded only, the dashpot of the bonds crossing it (None: the mean of the
+    two layers'). ``declared`` tells whether the scene file has an entry for it.
     """
 
     below: str
@@ -176,6 +181,7 @@ class Interface:
     stiffness: float | None = None
     friction: float | None = None
     states: str | tuple[str, ...] | None = None
+    viscosity: float | None = None
     declared: bool = False
 
     @property
@@ -203,6 +209,14 @@ class Load:
 
 
 @dataclass(frozen=True)
+class Damping:
+    """``[damping]``: mass-proportional damping, ``C += mass · M`` (the bonds' dashpots are
+    the layers' and bands' ``viscosity``; docs/damping.md)."""
+
+    mass: float = 0.0
+
+
+@dataclass(frozen=True)
 class Solver:
     """``[solver]``: method name and the common controls (``None`` = the solver's default)."""
 
@@ -226,6 +240,7 @@ class Scene:
     embedded: tuple[Embedded, ...] = ()
     contact: Contact | None = None
     load: Load | None = None
+    damping: Damping | None = None
     solver: Solver = field(default_factory=Solver)
     petsc: Mapping[str, Any] = field(default_factory=FrozenOptions)
     title: str = ""
@@ -253,6 +268,13 @@ class Scene:
             if layer.name == name:
                 return k
         raise KeyError(name)
+
+    @property
+    def damped(self) -> bool:
+        """Whether the scene has damping: a viscosity > 0 somewhere or ``[damping] mass`` > 0
+        (every one 0 or absent: exactly the undamped model)."""
+        etas = [m.viscosity for m in self.layers + self.embedded] + [i.viscosity for i in self.interfaces]
+        return any(eta for eta in etas if eta is not None) or bool(self.damping and self.damping.mass)
 
     def frictional_interfaces(self) -> tuple[Interface, ...]:
         return tuple(itf for itf in self.interfaces if itf.kind == "frictional")
@@ -287,6 +309,8 @@ class Scene:
             table["contact"] = _table(self.contact)
         if self.load is not None:
             table["load"] = _table(self.load)
+        if self.damping is not None:
+            table["damping"] = _table(self.damping)
         table["solver"] = _table(self.solver)
         if len(self.petsc):
             table["petsc"] = dict(self.petsc)

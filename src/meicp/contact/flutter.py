@@ -43,6 +43,7 @@ from ..core.matrix import is_petsc_mat, to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
+from .damped import damped_flutter
 from .flutter_growth import FlutterGrowth, combine_growths, dense_growth, search_growth
 from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState, state_names
@@ -476,6 +477,8 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     if n == 0:
         return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True,
                              growth=NO_FLUTTER)
+    if pen.damped:  # the quadratic pencil: dense only so far (ProblemError past dense_max)
+        return damped_flutter(pen, comm, dense_max=dense_max)
     if n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max):
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
         if comm is None or comm_size(comm) == 1:

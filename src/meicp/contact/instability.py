@@ -47,6 +47,7 @@ from ..petsc.assembly import LatticeMatrices
 from ..petsc.comm import index_max
 from ..petsc.stages import stage
 from ..scene import Scene
+from .damped import DampingUsed, damped_divergence, refuse
 from .divergence import all_held, divergence_of
 from .flutter import analyze_flutter, flutter_asked, not_analysed
 from .lines import BASE, ContactState, state_names
@@ -100,9 +101,10 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
     check_size(scene, memory=memory, index_max=index_max(), ranks=comm_size(comm), where=where)
     model = LatticeModel(scene)
     if not has_contact(scene):  # no friction: no instability to decide, its vibration modes instead
+        refuse(scene, "the modal analysis of a scene without contact")
         return modal_analysis(scene, model, comm, nev=solver_options.get("nev"),
                               options=solver_options.get("options"))
-    result = InstabilityResult()
+    result = InstabilityResult(damping=DampingUsed.of(scene))
     # the lattice, assembled once and read by every step below; PETSc (row bands) when
     # distributed, else SciPy (serial: the static equilibrium assembles it, reading it first)
     with LatticeMatrices(model, comm) as lattice:
@@ -148,7 +150,8 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    verdict = divergence_of(pen, scene, comm, method, lam_min, tol, solver_options)
+                    verdict = (damped_divergence(pen, comm, method, lam_min, tol, solver_options) if pen.damped
+                               else divergence_of(pen, scene, comm, method, lam_min, tol, solver_options))
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):

@@ -75,6 +75,12 @@ class Pencil:
     def distributed(self) -> bool:
         return is_petsc_mat(self.A)
 
+    @property
+    def damped(self) -> bool:
+        """Whether the lattice has damping: the pencil is then quadratic, λ²B + λD − A with
+        D = P̃CQ̃ (:mod:`meicp.contact.damped`)."""
+        return self.lattice.model.damped
+
     def __enter__(self) -> "Pencil":
         return self
 

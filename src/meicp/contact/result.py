@@ -171,6 +171,9 @@ class InstabilityResult(Result):
         grazing case, in the order of :func:`~meicp.contact.maps.grazing_cases` (None for a
         case with every DOF held: nothing to solve); empty when no MEiCP was reached.
     sizes: DOF counts (all, retained, complementarity).
+    damping: the damping the analysis used (:class:`~meicp.contact.damped.DampingUsed`: each
+        material's viscosity, ``[damping] mass``), None for an undamped scene; damped, σ = λ²
+        and ``growth_rate`` = λ of the quadratic problem (docs/damping.md).
     critical_friction: the critical friction stored beside the result (results.h5 of
         ``meicp solve --critical-friction``, read back by :func:`meicp.load_results`);
         ``analyze`` leaves it None (:func:`meicp.critical_friction` computes it).
@@ -195,6 +198,7 @@ class InstabilityResult(Result):
     proofs: list = field(default_factory=list)
     sizes: dict = field(default_factory=dict)
     critical_friction: object = None
+    damping: object = None
 
     def __repr__(self) -> str:
         head = self.verdict if self.success else f"FAILED ({self.status}), {self.verdict}"
@@ -265,9 +269,11 @@ class InstabilityResult(Result):
         proofs (a σ-window [0, ∞) as ``[0.0, null]`` with ``sigma_window_infinite: [0, 1]``:
         :mod:`meicp.core.json_values`), modes (each :meth:`Mode.to_dict`, no shapes), flutter_modes (each
         :meth:`FlutterMode.to_dict`), states, interface_states, sizes, timings, and the
-        static equilibrium's status when states were solved for."""
+        static equilibrium's status when states were solved for; ``damping`` (first) when
+        the scene is damped."""
         static = self.static
-        return {
+        damping = {} if self.damping is None else {"damping": self.damping.to_dict()}
+        return damping | {
             "analysis": self.analysis, "verdict": self.verdict, "stable": self.stable,
             "divergence": self.divergence, "flutter": self.flutter,
             "status": self.status, "success": self.success, "message": self.message,
@@ -291,6 +297,8 @@ class InstabilityResult(Result):
         lines = [f"{self.verdict}: {self.evidence}"]
         if not self.modal:
             lines = [self.verdict, f"  divergence: {self.divergence_verdict}: {self.evidence}"]
+        if self.damping is not None:
+            lines.insert(1, f"  damping: {self.damping.describe()}")
         for k, m in enumerate(self.modes[:SUMMARY_MODES]):
             if self.modal:
                 lines.append(f"  mode {k}: σ = {m.sigma:.10g}, angular frequency ω = {m.frequency:.6g}, "
@@ -328,6 +336,8 @@ class InstabilityResult(Result):
             st = list(self.interface_states.get(itf.below) or [])
             rows.append((f"interface {itf.below}", f"{scene.nx} contact pairs, μ = {itf.friction:g}: "
                                                    f"{states_compact(st)}{_strip(st)}"))
+        if self.damping is not None:
+            rows.append(("damping", self.damping.describe()))
         verdict = self.verdict
         if not self.success:
             verdict = f"FAILED ({self.status})" + ("" if self.stable is None else f", last verdict {verdict}")

@@ -25,6 +25,7 @@ The whole schema, with defaults (``required`` = no default)::
     rows = 2                      # required, integer >= 1
     stiffness = 1.0               # required, > 0: k of every bond inside the layer
     density = 1.0                 # required, > 0: node mass ρ·a³ (both DOFs)
+    viscosity = 0.02              # optional, >= 0: a dashpot per bond (Kelvin–Voigt; none: 0)
 
     [[embedded]]                  # optional: a band of another material inside a layer
     name = "stiff"                # required, unique
@@ -36,6 +37,7 @@ The whole schema, with defaults (``required`` = no default)::
     stiffness = 10.0              # required, > 0
     density = 1.0                 # required, > 0
     interface_stiffness = 2.0     # k of bonds to the host (default: lattice rule)
+    viscosity = 0.1               # optional, >= 0 (bonds to the host: the mean with the host's)
 
     [boundary]                    # each side: "free" (default), "fixed", "fixed_x", "fixed_y";
     top = "fixed"                 # bottom may also be "contact" (a rigid rough base, needs
@@ -47,6 +49,7 @@ The whole schema, with defaults (``required`` = no default)::
     below = "A"                   # required: a layer that is not the top one
     kind = "bonded"               # "bonded" (default) | "frictional"
     stiffness = 3.0               # bonded only: k_AB (default: lattice rule)
+    viscosity = 0.03              # bonded only, >= 0: η of its bonds (default: the layers' mean)
     friction = 0.6                # frictional only, required, >= 0: Coulomb μ
     states = "solve"              # frictional only: see [contact].states (default "solve")
 
@@ -66,6 +69,9 @@ The whole schema, with defaults (``required`` = no default)::
                                       # at a corner the top row's, then a fixed bottom
                                       # row's prescription wins
     gravity = 0.0                 # body force -gravity·ρ·a³ on every node, in y
+
+    [damping]                     # optional (docs/damping.md)
+    mass = 0.0                    # >= 0: C += mass·M
 
     [solver]
     method = "auto"               # a method name, checked by the solver that uses it

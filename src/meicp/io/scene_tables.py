@@ -9,8 +9,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from ..core.validation import MAX_TOL
-from ..scene import (BOUNDARY_KINDS, CONTACT, INTERFACE_KINDS, SIDES, SOLVE, Boundary, Contact, Embedded,
-                     FrozenOptions, Interface, Lattice, Layer, Load, Scene, Solver)
+from ..scene import (BOUNDARY_KINDS, CONTACT, INTERFACE_KINDS, SIDES, SOLVE, Boundary, Contact, Damping,
+                     Embedded, FrozenOptions, Interface, Lattice, Layer, Load, Scene, Solver)
 from .scene_values import KEYS, Table, ValueChecks, fmt_value
 
 #: the smallest normal double: a node mass below it loses precision, 0 makes B singular
@@ -47,6 +47,8 @@ class SceneParser(ValueChecks):
                                  f"{boundary.bottom!r}, not \"contact\"")
         load_data = top.raw("load", None)
         load = None if load_data is None else self.load(load_data, boundary)
+        damping_data = top.raw("damping", None)
+        damping = None if damping_data is None else self.damping(damping_data)
         solver = self.solver(top.raw("solver", {}))
         petsc = self.petsc(top.raw("petsc", {}))
         top.done()
@@ -54,9 +56,10 @@ class SceneParser(ValueChecks):
         if ny * lattice.nx * 2 >= 2**62:
             self.fail("layers", f"declare {ny} rows x {lattice.nx} columns: too many DOFs")
         self.magnitudes(lattice, ny, layers, embedded, interfaces, contact, load)
+        self.damping_magnitudes(lattice, layers, embedded, damping)
         return Scene(lattice=lattice, layers=tuple(layers), boundary=boundary,
                      interfaces=tuple(interfaces), embedded=tuple(embedded), contact=contact,
-                     load=load, solver=solver, petsc=petsc, title=title, source=self.source)
+                     load=load, damping=damping, solver=solver, petsc=petsc, title=title, source=self.source)
 
     def lattice(self, data) -> Lattice:
         t = Table(self, data, "lattice", KEYS["lattice"])
@@ -84,7 +87,8 @@ class SceneParser(ValueChecks):
             name = self.new_name(t, names, "the layer name")
             layer = Layer(name=name, rows=t.integer("rows", minimum=1),
                           stiffness=t.number("stiffness", positive=True),
-                          density=t.number("density", positive=True))
+                          density=t.number("density", positive=True),
+                          viscosity=t.number("viscosity", None, nonnegative=True))
             t.done()
             layers.append(layer)
         return layers
@@ -125,6 +129,7 @@ class SceneParser(ValueChecks):
             kab = t.number("interface_stiffness", None, positive=True)
             if kab is None:
                 kab = lattice.pair_stiffness(stiffness, by_name[host].stiffness)
+            viscosity = t.number("viscosity", None, nonnegative=True)
             t.done()
             box = (host, row, row + rows, column, column + columns)
             for other_k, other in boxes:
@@ -134,7 +139,7 @@ class SceneParser(ValueChecks):
             boxes.append((k, box))
             out.append(Embedded(name=name, host=host, stiffness=stiffness, density=density,
                                 row=row, rows=rows, column=column, columns=columns,
-                                interface_stiffness=kab))
+                                interface_stiffness=kab, viscosity=viscosity))
         return out
 
     def interfaces(self, data, lattice, layers) -> list[Interface]:
@@ -159,11 +164,13 @@ class SceneParser(ValueChecks):
                 stiffness = t.number("stiffness", None, positive=True)
                 if stiffness is None:
                     stiffness = lattice.pair_stiffness(layers[i].stiffness, layers[i + 1].stiffness)
-                itf = Interface(below=below, index=i, kind=kind, stiffness=stiffness, declared=True)
+                itf = Interface(below=below, index=i, kind=kind, stiffness=stiffness,
+                                viscosity=t.number("viscosity", None, nonnegative=True), declared=True)
             else:
-                if "stiffness" in entry:
-                    self.fail(t.key("stiffness"), "applies to kind = \"bonded\" only "
-                                                  "(a frictional interface has no bonds)")
+                for bad in ("stiffness", "viscosity"):
+                    if bad in entry:
+                        self.fail(t.key(bad), "applies to kind = \"bonded\" only "
+                                              "(a frictional interface has no bonds)")
                 friction = t.number("friction", positive=False, nonnegative=True)
                 states = self.states(t.key("states"), t.raw("states", SOLVE), lattice.nx)
                 itf = Interface(below=below, index=i, kind=kind, friction=friction,
@@ -217,6 +224,23 @@ class SceneParser(ValueChecks):
         gravity = t.number("gravity", 0.0)
         t.done()
         return Load(top_displacement=top, gravity=gravity, side_displacement=side)
+
+    def damping(self, data) -> Damping:
+        t = Table(self, data, "damping", KEYS["damping"])
+        mass = t.number("mass", 0.0, nonnegative=True)
+        t.done()
+        return Damping(mass=mass)
+
+    def damping_magnitudes(self, lattice, layers, embedded, damping) -> None:
+        """Damping values each finite alone whose products are not: the mass term α·ρ·a³ of
+        ``[damping] mass`` (each viscosity enters C alone, as a stiffness enters K)."""
+        if damping is None or not damping.mass:
+            return
+        cube = lattice.spacing ** 3
+        densities = [m.density for m in layers] + [e.density for e in embedded]
+        if not math.isfinite(damping.mass * max(densities) * cube):
+            self.fail("damping.mass", f"= {damping.mass:g} times the largest node mass ρ·a³ = "
+                                      f"{max(densities) * cube:g} overflows")
 
     def solver(self, data) -> Solver:
         t = Table(self, data, "solver", KEYS["solver"])

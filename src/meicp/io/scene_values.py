@@ -11,8 +11,8 @@ import reprlib
 from collections.abc import Mapping
 
 from ..core.errors import ProblemError
-from ..scene import (SOLVE, STATES, Boundary, Contact, Embedded, Interface, Lattice, Layer, Load, Scene,
-                     Solver)
+from ..scene import (SOLVE, STATES, Boundary, Contact, Damping, Embedded, Interface, Lattice, Layer, Load,
+                     Scene, Solver)
 
 #: the default of a key that has none: its absence is an error
 REQUIRED = object()
@@ -43,6 +43,7 @@ KEYS = {
     "interfaces": table_keys(Interface, "index", "declared"),
     "contact": table_keys(Contact),
     "load": table_keys(Load),
+    "damping": table_keys(Damping),
     "solver": table_keys(Solver),
 }
 

@@ -11,6 +11,10 @@ Element matrix of a bond of stiffness ``k`` and unit direction ``e`` (docs/desig
 of seed 000 in §12 applied): ``k [[A, −A], [−A, A]]`` with ``A = e eᵀ``, each bond with its own
 direction.  Mass: ``ρ a³`` on both DOFs of every node.
 
+Damping C (docs/damping.md) is assembled exactly like K with each bond's viscosity η in
+place of k (:func:`damping_block`, :func:`damping_matrix_scipy`), plus ``α·M`` on the
+diagonal for ``[damping] mass = α``; it has K's sparsity pattern (explicit zeros where η = 0).
+
 Serial and plain SciPy: :func:`assemble_scipy` gives CSR matrices.  The distributed PETSc
 assembly (:mod:`meicp.petsc.assembly`) builds its rows from the same blocks
 (:func:`stiffness_block`, :func:`mass_diagonal`) and hosts :func:`meicp.assemble`, which picks
@@ -94,12 +98,32 @@ def stiffness_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32):
     """The DOF rows of K for node rows ``[j0, j1)`` as CSR pieces
     ``(indptr (starting at 0), global column indices, values)``, columns sorted in each row."""
     kk = model.neighbour_stiffness(j0, j1)  # (m, 9), zero where no bond
+    return _bond_block(model, j0, j1, dtype, kk, kk > 0)
+
+
+def damping_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32):
+    """The DOF rows of C for node rows ``[j0, j1)``, as :func:`stiffness_block` gives K's: the
+    same entries (an explicit 0 where a bond has no viscosity), each bond's η in place of its
+    k, and ``α ρ a³`` added on the diagonal (``[damping] mass = α``)."""
+    present = model.neighbour_stiffness(j0, j1) > 0
+    eta = model.neighbour_stiffness(j0, j1, model.cmat)
+    diagonal = model.damping_mass * model.mass(j0, j1) if model.damping_mass else None
+    return _bond_block(model, j0, j1, dtype, eta, present, diagonal)
+
+
+def _bond_block(model: LatticeModel, j0: int, j1: int, dtype, kk: np.ndarray, present: np.ndarray,
+                diagonal: np.ndarray | None = None):
+    """CSR rows of ``Σ_bonds c [[A, −A], [−A, A]]`` with the coefficient ``c`` of each bond in
+    ``kk`` (m, 9), entries where ``present`` (m, 9), plus ``diagonal`` (per node) on both DOFs."""
     m = kk.shape[0]
     A = model.slot_matrices()  # (9, 2, 2), zero for SELF
-    present = kk > 0
+    present = present.copy()
     present[:, SELF] = True
     vals = np.multiply(kk[:, None, :, None], -A.transpose(1, 0, 2)[None])  # (m, c, s, d)
     vals[:, :, SELF, :] = (kk @ A.reshape(9, 4)).reshape(m, 2, 2)
+    if diagonal is not None:
+        vals[:, 0, SELF, 0] += diagonal
+        vals[:, 1, SELF, 1] += diagonal
     nodes = np.arange(j0 * model.nx, j1 * model.nx, dtype=np.int64)
     cols = 2 * (nodes[:, None, None] + _slot_offsets(model)[None, :, None]) + np.arange(2)[None, None, :]
     cols = cols.astype(dtype, copy=False)  # (m, s, d); masked-out entries may be out of range
@@ -115,6 +139,16 @@ def stiffness_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32):
 
 def assemble_scipy(model: LatticeModel, chunk_nodes: int | None = None):
     """``(K, M)`` as SciPy CSR, built chunk by chunk into exactly allocated arrays."""
+    return _stencil_csr(model, stiffness_block, chunk_nodes), mass_matrix_scipy(model)
+
+
+def damping_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None) -> sp.csr_matrix:
+    """C as SciPy CSR (K's pattern; all zero for a scene without damping)."""
+    return _stencil_csr(model, damping_block, chunk_nodes)
+
+
+def _stencil_csr(model: LatticeModel, block, chunk_nodes: int | None) -> sp.csr_matrix:
+    """The matrix whose rows ``block(model, a, b, index dtype)`` gives, chunk by chunk."""
     n = model.n_dofs
     idx = index_dtype(model)
     indptr = np.zeros(n + 1, dtype=np.int64 if idx == np.int64 else np.int32)
@@ -127,7 +161,7 @@ def assemble_scipy(model: LatticeModel, chunk_nodes: int | None = None):
     data = np.empty(nnz)
     for a, b in chunks(model, 0, model.ny, chunk_nodes):
         ra, _ = model.dof_range(a, b)
-        bp, bi, bv = stiffness_block(model, a, b, idx)
+        bp, bi, bv = block(model, a, b, idx)
         start = int(indptr[ra])
         indices[start:start + bi.size] = bi
         data[start:start + bv.size] = bv
@@ -135,8 +169,7 @@ def assemble_scipy(model: LatticeModel, chunk_nodes: int | None = None):
     K = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
     K.has_sorted_indices = True
     K.has_canonical_format = True
-    M = mass_matrix_scipy(model)
-    return K, M
+    return K
 
 
 def mass_diagonal(model: LatticeModel, j0: int = 0, j1: int | None = None) -> np.ndarray:

@@ -7,7 +7,9 @@ boundary.  Reference position ``(a·i + shear·a·j, a·j)``.
 
 Materials are numbered layers first (bottom to top), then embedded bands in scene order.
 A bond joining two nodes of one material has that material's stiffness; a bond joining two
-materials has the pair's interface stiffness (``LatticeModel.kmat``).  Bonds crossing a
+materials has the pair's interface stiffness (``LatticeModel.kmat``).  Its dashpot (damping,
+docs/damping.md) follows the same rule with the viscosities (``LatticeModel.cmat``: the mean
+of the two materials', or a bonded interface's own ``viscosity``).  Bonds crossing a
 frictional interface do not exist.  Every quantity is computed for the nodes asked for
 (a row band, a chunk), never for the whole lattice unless asked: a rank holding rows
 ``j0..j1`` touches only those rows and their two neighbour rows.
@@ -38,6 +40,7 @@ class Material:
     density: float
     kind: str  # "layer" | "embedded"
     host: int | None = None  # the host layer of an embedded band
+    viscosity: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -55,7 +58,8 @@ class LatticeModel:
     """Everything the assembly and the output need, derived once from a :class:`Scene`.
 
     Attributes: ``nx, ny, spacing, shear``; ``materials`` (tuple of :class:`Material`);
-    ``kmat`` (n_mat × n_mat bond stiffness, diagonal = own stiffness); ``row_material``
+    ``kmat`` (n_mat × n_mat bond stiffness, diagonal = own stiffness); ``cmat`` (the same for
+    the bonds' viscosity) and ``damping_mass`` (α of ``[damping] mass``); ``row_material``
     (layer index of each row); ``layer_rows`` ((first, end) rows of each layer);
     ``regions`` (embedded rectangles); ``cut_above`` (bool per row: no bonds between row j
     and j+1, a frictional interface); ``boundary``; ``scene``.
@@ -71,8 +75,9 @@ class LatticeModel:
         self.shear = scene.lattice.shear
         self.boundary = scene.boundary
         layers = scene.layers
-        mats = [Material(layer.name, layer.stiffness, layer.density, "layer") for layer in layers]
-        mats += [Material(e.name, e.stiffness, e.density, "embedded", scene.layer_index(e.host))
+        mats = [Material(layer.name, layer.stiffness, layer.density, "layer", None, layer.viscosity or 0.0)
+                for layer in layers]
+        mats += [Material(e.name, e.stiffness, e.density, "embedded", scene.layer_index(e.host), e.viscosity or 0.0)
                  for e in scene.embedded]
         self.materials = tuple(mats)
         nm = len(mats)
@@ -94,6 +99,8 @@ class LatticeModel:
             regions.append(Region(e_id, j0, j0 + e.rows, e.column, e.column + e.columns))
         self.kmat = kmat
         self.kmat.setflags(write=False)
+        self.cmat = _viscosity_table(scene, mats)
+        self.damping_mass = scene.damping.mass if scene.damping is not None else 0.0
         self.regions = tuple(regions)
         self.row_material = np.repeat(np.arange(len(layers)), [layer.rows for layer in layers])
         self.cut_above = np.zeros(self.ny, dtype=bool)
@@ -101,6 +108,11 @@ class LatticeModel:
             if not itf.bonded:
                 self.cut_above[starts[itf.index + 1] - 1] = True
         self.mass_per_material = np.array([m.density for m in mats]) * self.spacing ** 3
+
+    @property
+    def damped(self) -> bool:
+        """Whether C is not zero (:attr:`meicp.scene.Scene.damped`)."""
+        return self.scene.damped
 
     # ------------------------------------------------------------------ sizes, numbering
     @property
@@ -244,14 +256,15 @@ class LatticeModel:
         return np.arange((r - 1) * self.nx, r * self.nx), np.arange(r * self.nx, (r + 1) * self.nx)
 
     # ------------------------------------------------------------------ bonds
-    def neighbour_stiffness(self, j0: int, j1: int) -> np.ndarray:
+    def neighbour_stiffness(self, j0: int, j1: int, table: np.ndarray | None = None) -> np.ndarray:
         """Stiffness of the bond from each node of rows ``[j0, j1)`` to each of its 9
         :data:`SLOTS`, shape (n, 9); 0 where there is no bond (outside the lattice, across a
-        frictional interface, and the node itself)."""
+        frictional interface, and the node itself).  ``table``: another per-pair coefficient
+        in place of ``kmat`` (``cmat``: the bonds' viscosity)."""
         grid = self.material_grid(j0, j1, pad=1)
         nm = len(self.materials)
         kext = np.zeros((nm + 1, nm + 1))  # index -1 (outside) reads the zero last row/column
-        kext[:nm, :nm] = self.kmat
+        kext[:nm, :nm] = self.kmat if table is None else table
         rows, nx = j1 - j0, self.nx
         me = grid[1:1 + rows, 1:1 + nx]
         out = np.zeros((rows, nx, 9))
@@ -311,11 +324,11 @@ class LatticeModel:
         for k, layer in enumerate(s.layers):
             a, b = self.layer_rows[k]
             lines.append(f"  layer {layer.name!r}: rows {a}..{b - 1}, k = {layer.stiffness:g}, "
-                         f"rho = {layer.density:g}")
+                         f"rho = {layer.density:g}" + _eta(layer.viscosity))
         for e in s.embedded:
             lines.append(f"  embedded {e.name!r} in {e.host!r}: rows +{e.row}..+{e.row + e.rows - 1}, "
                          f"columns {e.column}..{e.column + e.columns - 1}, k = {e.stiffness:g}, "
-                         f"rho = {e.density:g}, k to host = {e.interface_stiffness:g}")
+                         f"rho = {e.density:g}, k to host = {e.interface_stiffness:g}" + _eta(e.viscosity))
         for itf in s.interfaces:
             if itf.bonded:
                 lines.append(f"  interface above {itf.below!r}: bonded, k_AB = {itf.stiffness:g}")
@@ -323,4 +336,22 @@ class LatticeModel:
                 lines.append(f"  interface above {itf.below!r}: frictional, mu = {itf.friction:g}")
         b = self.boundary
         lines.append(f"  boundary: top {b.top}, bottom {b.bottom}, left {b.left}, right {b.right}")
+        if self.damping_mass:
+            lines.append(f"  damping: C += {self.damping_mass:g} M")
         return "\n".join(lines)
+
+
+def _eta(viscosity) -> str:
+    return f", eta = {viscosity:g}" if viscosity else ""
+
+
+def _viscosity_table(scene, mats) -> np.ndarray:
+    """The bonds' viscosity per pair of materials: its own inside a material, the mean of the
+    two across materials, a bonded interface's own ``viscosity`` where it gives one."""
+    eta = np.array([m.viscosity for m in mats])
+    cmat = 0.5 * eta[:, None] + 0.5 * eta[None, :]  # halves first: two huge values do not overflow
+    for itf in scene.interfaces:
+        if itf.bonded and itf.viscosity is not None:
+            cmat[itf.index, itf.index + 1] = cmat[itf.index + 1, itf.index] = itf.viscosity
+    cmat.setflags(write=False)
+    return cmat

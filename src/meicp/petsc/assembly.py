@@ -24,8 +24,8 @@ import scipy.sparse as sp
 
 from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
-from ..lattice.assembly import (as_model, assemble_scipy, chunks, index_dtype, mass_diagonal,
-                                neighbour_exists, stiffness_block)
+from ..lattice.assembly import (as_model, assemble_scipy, chunks, damping_block, damping_matrix_scipy, index_dtype,
+                                mass_diagonal, neighbour_exists, stiffness_block)
 from ..lattice.model import SLOTS, LatticeModel
 from . import import_petsc
 from .comm import to_petsc_comm
@@ -47,6 +47,19 @@ def assemble(scene, comm=None):
     if comm is None:
         return assemble_scipy(model)
     return assemble_petsc(model, comm)
+
+
+def assemble_damping(scene, comm=None):
+    """The damping matrix C of a scene (docs/damping.md), in natural DOF numbering: assembled
+    exactly like K with each bond's viscosity η in place of its stiffness k (a bond joining
+    two materials: the mean, or its bonded interface's own ``viscosity``), plus
+    ``[damping] mass`` · M; K's sparsity pattern, all zero without damping.  ``comm`` as for
+    :func:`assemble`: None gives SciPy CSR, a communicator a PETSc AIJ matrix on K's row
+    bands (collective; the caller destroys it)."""
+    model = as_model(scene)
+    if comm is None:
+        return damping_matrix_scipy(model)
+    return _stencil_mat(model, to_petsc_comm(comm), damping_block)
 
 
 class LatticeMatrices:
@@ -108,6 +121,11 @@ class LatticeMatrices:
             return self.K, self.M
         return assemble_scipy(self.model)
 
+    def damping(self) -> sp.csr_matrix:
+        """C (:func:`assemble_damping`) as SciPy CSR on every rank, for the damped paths, which
+        are dense and small (docs/damping.md); assembled at each call, not kept."""
+        return damping_matrix_scipy(self.model)
+
     def destroy(self) -> None:
         """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
         if self.distributed:
@@ -157,6 +175,26 @@ def assemble_petsc(model: LatticeModel, comm, chunk_nodes: int | None = None):
     """
     PETSc = import_petsc()
     pcomm = to_petsc_comm(comm)
+    K = _stencil_mat(model, pcomm, stiffness_block, chunk_nodes)
+    j0, j1 = model.row_band(pcomm.getRank(), pcomm.getSize())
+    r0, r1 = model.dof_range(j0, j1)
+    n, m = model.n_dofs, r1 - r0
+    idx = PETSc.IntType
+
+    M = PETSc.Mat().createAIJ(size=((m, n), (m, n)), nnz=(1, 0), comm=pcomm)
+    M.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
+    rows = np.arange(r0, r1, dtype=idx)
+    M.setValuesIJV(np.arange(m + 1, dtype=idx), rows, mass_diagonal(model, j0, j1), rowmap=rows)
+    M.assemble()
+    M.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    return K, M
+
+
+def _stencil_mat(model: LatticeModel, pcomm, block, chunk_nodes: int | None = None):
+    """The symmetric matrix whose rows ``block(model, a, b, index dtype)`` gives (K's
+    stencil), as a PETSc AIJ matrix on ``pcomm``'s row bands, preallocated exactly."""
+    PETSc = import_petsc()
     idx = PETSc.IntType
     if np.dtype(index_dtype(model)).itemsize > np.dtype(idx).itemsize:
         raise ProblemError(f"the lattice has {model.n_dofs} DOFs: too many for this PETSc build "
@@ -171,20 +209,12 @@ def assemble_petsc(model: LatticeModel, comm, chunk_nodes: int | None = None):
     K.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
     for a, b in chunks(model, j0, j1, chunk_nodes):
         ra, rb = model.dof_range(a, b)
-        indptr, indices, data = stiffness_block(model, a, b, idx)
+        indptr, indices, data = block(model, a, b, idx)
         K.setValuesIJV(indptr, indices, data, rowmap=np.arange(ra, rb, dtype=idx))
         del indptr, indices, data
     K.assemble()
     K.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-
-    M = PETSc.Mat().createAIJ(size=((m, n), (m, n)), nnz=(1, 0), comm=pcomm)
-    M.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
-    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
-    rows = np.arange(r0, r1, dtype=idx)
-    M.setValuesIJV(np.arange(m + 1, dtype=idx), rows, mass_diagonal(model, j0, j1), rowmap=rows)
-    M.assemble()
-    M.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    return K, M
+    return K
 
 
 def principal_submatrix(A, keep):

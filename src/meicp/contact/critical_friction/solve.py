@@ -19,6 +19,7 @@ from ...lattice.model import LatticeModel
 from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
 from ...scene import Scene
+from ..damped import refuse
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
 from ..problem import contact_states
@@ -76,6 +77,7 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     ``False``: never.  Never run for a bracket.  ``tol``: the bisection's relative width in μ
     (in (0, 0.01]).  ``mu_max``: finite, > 0.
     """
+    refuse(scene, "the critical friction")
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     comm = mpi_comm(comm)
     flutter = flutter_asked(scene, flutter)

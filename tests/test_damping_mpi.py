@@ -1,0 +1,56 @@
+"""Damping on 2 ranks: C distributed as K is, identical to the serial one; the damped
+verdict the same on one and two ranks (the dense references run on rank 0, broadcast)."""
+
+import numpy as np
+import pytest
+
+import meicp
+from meicp.io.scene import load_scene, scene_from_dict
+from meicp.lattice.model import LatticeModel
+from meicp.petsc.assembly import assemble_damping
+
+from .test_damping import INTERFACE, TWO_LAYERS, damped
+from .test_lattice import SCENES
+
+pytestmark = pytest.mark.mpi(min_size=2)
+
+
+def _damped_embedded():
+    d = load_scene(SCENES / "embedded_layer.toml").to_dict()
+    for k, layer in enumerate(d["layers"]):
+        layer["viscosity"] = 0.01 * (k + 1)
+    d["embedded"][0]["viscosity"] = 0.2
+    d["damping"] = {"mass": 0.05}
+    return scene_from_dict(d)
+
+
+@pytest.mark.parametrize("name", ["two_layers", "embedded"])
+def test_distributed_damping_equals_serial(comm, name):
+    from meicp.petsc.mat import mat_to_scipy
+
+    scene = damped(TWO_LAYERS, eta=(0.02, 0.1), mass=0.3) if name == "two_layers" else _damped_embedded()
+    model = LatticeModel(scene)
+    C = assemble_damping(scene, comm)
+    try:
+        j0, j1 = model.row_band(comm.rank, comm.size)
+        assert C.getOwnershipRange() == model.dof_range(j0, j1)
+        Cs = assemble_damping(scene)
+        assert abs(mat_to_scipy(C) - Cs).max() == 0
+        info = C.getInfo(C.InfoType.LOCAL)
+        assert info["mallocs"] == 0
+    finally:
+        C.destroy()
+
+
+@pytest.mark.parametrize("scene", [damped(TWO_LAYERS, eta=(0.02, 0.02)), damped(INTERFACE, eta=(0.02, 0.05))],
+                         ids=["two_layers", "interface"])
+def test_the_damped_verdict_is_the_same_on_one_and_two_ranks(comm, scene):
+    from mpi4py import MPI
+
+    two = meicp.analyze(scene, comm=comm)
+    one = meicp.analyze(scene, comm=MPI.COMM_SELF)
+    assert (two.divergence, two.flutter, two.stable) == (one.divergence, one.flutter, one.stable)
+    assert [m.sigma for m in two.modes] == pytest.approx([m.sigma for m in one.modes], rel=1e-12)
+    assert [m.sigma for m in two.flutter_modes] == pytest.approx([m.sigma for m in one.flutter_modes], rel=1e-12)
+    assert two.flutter_growth.lower == pytest.approx(one.flutter_growth.lower, rel=1e-12)
+    assert np.allclose(comm.bcast(two.flutter_growth.lower, root=0), two.flutter_growth.lower)
