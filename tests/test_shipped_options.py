@@ -79,3 +79,25 @@ def test_the_scene_nev_reaches_the_last_search_too(monkeypatch):
         assert settings.keywords["nev"] == 1 and settings.widened_nev == 5
         settings = search_module.search_settings(pen, scene, None, 0.0, 1e-10, {"nev": 1}, 1.0, 0.0)
         assert settings.keywords["nev"] == 1 and settings.widened_nev is None
+
+
+def test_the_first_search_goes_on_while_a_mode_converges_fast():
+    """The shipped 10⁶-DOF scene coarsened to 100 × 50 nodes: its mode needs 9 Krylov–Schur
+    restarts from the top of the window.  Cut at the first search's 6 it was found only by
+    the whole search, after a condensed proof and a σ-window (at 10⁶ DOFs 49 of 77 s); its
+    error estimate falls ≥ 10× a restart, so the first search now goes on and finds it."""
+    from meicp.contact.divergence import sigma_window
+
+    scene = _coarsened("extensive_contact.toml", 100, 25)
+    with pencil(scene) as pen:
+        kw = dict(J=pen.maps.J, method="active-set", lam_min=0.0, target=sigma_window.probe_top(pen.A, pen.B).shift,
+                  nev=1, max_iter=1, give_up_after=search_module.FIRST_GIVE_UP)
+        capped = meicp.solve_eicp(pen.A, pen.B, options={"eps_max_it": search_module.FIRST_EPS_MAX_IT}, **kw)
+        going_on = meicp.solve_eicp(pen.A, pen.B, options={"eps_max_it": search_module.FIRST_EPS_MAX_IT_CONVERGING},
+                                    converging_after=search_module.FIRST_EPS_MAX_IT, **kw)
+    assert not capped.solutions and going_on.solutions and going_on.coverage["gave_up"] == 0
+    assert search_module.FIRST_EPS_MAX_IT < going_on.coverage["eps_iterations"] <= \
+        search_module.FIRST_EPS_MAX_IT_CONVERGING
+    r = meicp.analyze(scene, flutter=False)
+    assert r.divergence is True and r.proofs[0].sigma_window is None  # no proof, no window spent
+    assert np.isclose(r.modes[0].sigma, going_on.solutions[0].lam, rtol=1e-8)
