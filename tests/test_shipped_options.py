@@ -101,3 +101,19 @@ def test_the_first_search_goes_on_while_a_mode_converges_fast():
     r = meicp.analyze(scene, flutter=False)
     assert r.divergence is True and r.proofs[0].sigma_window is None  # no proof, no window spent
     assert np.isclose(r.modes[0].sigma, going_on.solutions[0].lam, rtol=1e-8)
+
+
+def test_an_option_that_leaves_the_verdict_undecided_is_named(caplog):
+    """A budget of one support update decides nothing where the mode is two supports away,
+    and a method by name that runs no proof decides no stable scene: the undecided evidence
+    (and a warning) names the option, where the defaults decide."""
+    unstable = two_layer_scene(200, (10, 10), mu=2.0, states="slip+", shear=0.0)
+    assert meicp.analyze(unstable, flutter=False).divergence is True
+    with caplog.at_level("WARNING", logger="meicp"):
+        r = meicp.analyze(unstable, flutter=False, max_iter=1)
+    assert r.divergence is None and "max_iterations = 1 (the [solver] table or the caller) ended" in r.evidence
+    assert any("max_iterations = 1" in m for m in caplog.messages)
+    stable = two_layer_scene(60, (2, 2), mu=1.0, states="slip+", shear=0.5)
+    assert meicp.analyze(stable, flutter=False).divergence is False
+    r = meicp.analyze(dataclasses.replace(stable, solver=Solver(method="semismooth")), flutter=False)
+    assert r.divergence is None and "method 'semismooth' (the [solver] table or the caller) runs no proof" in r.evidence

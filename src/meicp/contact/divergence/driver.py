@@ -110,4 +110,10 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     widened = f", the last with nev = {settings.widened_nev}," if settings.widened_nev else ""
     reasons.append(f"the search from σ = {settings.target:.6g}{widened} over {last.tally.supports_visited} "
                    f"support(s) found no mode ({last.eicp.status})")
+    if settings.full_budget is not None and (not settings.whole_search_left or last.eicp.status == "max_iterations"):
+        # the caller's or the scene's budget, not the search, ended it: say which option
+        why = (f"max_iterations = {settings.full_budget} (the [solver] table or the caller) ended the search "
+               f"after {last.tally.supports_visited} support(s): without it the search has its own budget")
+        log.warning("divergence undecided: %s", why)
+        reasons.append(why)
     return steps.undecided(pen, top, reasons, last, window, started)
