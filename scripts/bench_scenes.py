@@ -16,7 +16,7 @@ resident set), then, in a fresh process on as many ranks, one shift-and-invert e
 of the scene's pencil (``bench_common.slepc_eigensolve``, 4 eigenvalues nearest 0): where a
 contact line's states come from the static equilibrium (``states = "solve"``) that line is
 held (``stick``) for this reference, whose states are not known before the run.  A re-run
-replaces the rows of the scenes it ran in ``scenes.csv``.
+appends its rows to ``scenes.csv`` (oldest first); the chart shows each scene's latest.
 """
 
 from __future__ import annotations
@@ -112,6 +112,7 @@ def run(args) -> None:
     import meicp
 
     rows = []
+    before = {tuple(r.values()) for r in read_rows(csv_path("scenes"))} if csv_path("scenes").exists() else set()
     for path in solve_scenes(args.only):
         scene = meicp.load_scene(path)
         dofs = 2 * scene.nx * scene.ny
@@ -154,8 +155,7 @@ def run(args) -> None:
                "flutter_evidence": (doc.get("flutter_evidence") or "")[:200]}
         rows.append(row)
         print({k: row[k] for k in FIELDS[:18]}, flush=True)
-        ran = {r["scene"] for r in rows}
-        write_rows(csv_path("scenes"), rows, FIELDS, keep=lambda r: r["scene"] not in ran)
+        write_rows(csv_path("scenes"), rows, FIELDS, keep=lambda r: tuple(r.values()) in before)
     undecided = [r["scene"] for r in rows if r["divergence"] is not True and r["divergence"] is not False]
     print(f"{len(rows)} scene(s); divergence undecided: {', '.join(undecided) or 'none'}")
 
@@ -196,7 +196,8 @@ def chart(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = sorted(read_rows(csv_path("scenes")), key=lambda r: int(r["dofs"]))
+    latest = {r["scene"]: r for r in read_rows(csv_path("scenes"))}  # each scene's last run
+    rows = sorted(latest.values(), key=lambda r: int(r["dofs"]))
     names = [f"{r['scene'].removesuffix('.toml')}\n{int(r['dofs']):,} DOFs, {r['ranks']} rank(s)" for r in rows]
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 0.55 * len(rows) + 1.8), sharey=True)
     y = range(len(rows))
