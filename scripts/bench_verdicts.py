@@ -7,7 +7,7 @@ enumeration, and what a verdict costs against one SLEPc eigen-solve of the same 
     .venv/bin/python scripts/bench_verdicts.py family --sizes 1000:10+10 2000:10+10
     .venv/bin/python scripts/bench_verdicts.py check --count 80   # -> verdicts_check.csv
     flock /work/scratch/bench.lock mpirun -n 2 .venv/bin/python scripts/bench_verdicts.py cost \\
-        --nx 1000 --rows 250 250 --mu 3 1                          # -> verdicts_cost.csv
+        --nx 1000 --rows 250 250 --mu 3 1 --shear 0.5 0           # -> verdicts_cost.csv
     .venv/bin/python scripts/bench_verdicts.py chart
 
 Scenes: ``two_layer_scene`` (k = 1 / 5, ρ = 1 / 2, top fixed, sides free), every base node
@@ -94,30 +94,31 @@ def cost(args):
 
     comm = MPI.COMM_WORLD
     rows = []
-    for state in args.states:
-        for mu in args.mu:
-            scene = two_layer_scene(args.nx, tuple(args.rows), mu=mu, states=state, shear=args.shear)
-            with pencil(scene, comm=comm) as pen:
-                comm.Barrier()
-                t0 = time.perf_counter()
-                A, B = pen.A, pen.B
-                if not is_petsc_mat(A):  # one rank: the pencil is SciPy
-                    A, B = mat_from_scipy(None, A), mat_from_scipy(None, B)
-                slepc_eigensolve(A, B, 4)
-                comm.Barrier()
-                eig = time.perf_counter() - t0
+    # each shear beside the other, state by state and μ by μ: the sheared lattice and the
+    # unsheared one of data/scenes/extensive_contact.toml measured side by side
+    for state, mu, shear in ((st, m, sh) for st in args.states for m in args.mu for sh in args.shear):
+        scene = two_layer_scene(args.nx, tuple(args.rows), mu=mu, states=state, shear=shear)
+        with pencil(scene, comm=comm) as pen:
             comm.Barrier()
-            r, t = _verdict(scene, comm=comm)
-            if comm.rank == 0:
-                rows.append({"nx": args.nx, "rows": f"{args.rows[0]}+{args.rows[1]}", "dofs": r.sizes.get("dofs"),
-                             "J": r.sizes.get("complementarity"), "ranks": comm.size, "state": state,
-                             "shear": args.shear, "mu": mu, "divergence": r.divergence,
-                             "test": r.proofs[0].test,
-                             "sigma": f"{r.modes[0].sigma:.13g}" if r.modes else "", "analyze_s": f"{t:.2f}",
-                             "eigensolve_s": f"{eig:.2f}", "ratio": f"{t / eig:.2f}",
-                             "load1": f"{os.getloadavg()[0]:.1f}"})
-                print(rows[-1], flush=True)
-                print(r.evidence, flush=True)
+            t0 = time.perf_counter()
+            A, B = pen.A, pen.B
+            if not is_petsc_mat(A):  # one rank: the pencil is SciPy
+                A, B = mat_from_scipy(None, A), mat_from_scipy(None, B)
+            slepc_eigensolve(A, B, 4)
+            comm.Barrier()
+            eig = time.perf_counter() - t0
+        comm.Barrier()
+        r, t = _verdict(scene, comm=comm)
+        if comm.rank == 0:
+            rows.append({"nx": args.nx, "rows": f"{args.rows[0]}+{args.rows[1]}", "dofs": r.sizes.get("dofs"),
+                         "J": r.sizes.get("complementarity"), "ranks": comm.size, "state": state,
+                         "shear": shear, "mu": mu, "divergence": r.divergence,
+                         "test": r.proofs[0].test,
+                         "sigma": f"{r.modes[0].sigma:.13g}" if r.modes else "", "analyze_s": f"{t:.2f}",
+                         "eigensolve_s": f"{eig:.2f}", "ratio": f"{t / eig:.2f}",
+                         "load1": f"{os.getloadavg()[0]:.1f}"})
+            print(rows[-1], flush=True)
+            print(r.evidence, flush=True)
     if comm.rank == 0:
         write_rows(csv_path("verdicts_cost"), rows, COST)
 
@@ -168,7 +169,8 @@ def main():
     k.add_argument("--rows", type=int, nargs=2, default=(250, 250))
     k.add_argument("--mu", type=float, nargs="+", default=[3.0, 1.0])
     k.add_argument("--states", nargs="+", default=["slip-", "slip+"])
-    k.add_argument("--shear", type=float, default=0.5)
+    k.add_argument("--shear", type=float, nargs="+", default=[0.5, 0.0],
+                   help="reference shears, each run beside the others (0: the shipped scenes' lattice)")
     sub.add_parser("chart")
     args = p.parse_args()
     globals()[args.what](args)

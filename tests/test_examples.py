@@ -37,6 +37,7 @@ def test_solve_scene(cli, name):
     code, out, err = cli("solve", SCENES / name, "--no-output", "-q")
     assert code == Exit.OK, err
     assert re.search(rf"^verdict\s+{TABLE[name][1]}$", out, re.M), out
+    assert re.search(r"^divergence\s+(NO )?DIVERGENCE$", out, re.M), out  # every shipped scene decides (issue 33)
 
 
 def _coarsened(tmp_path, name):
@@ -57,6 +58,7 @@ def test_large_solve_scene_coarsened(cli, tmp_path, name):
     code, out, err = cli("solve", _coarsened(tmp_path, name), "--no-output", "-q")
     assert code == Exit.OK, err
     assert re.search(r"^verdict\s+(STABLE|UNSTABLE|UNDECIDED)$", out, re.M), out
+    assert re.search(r"^divergence\s+(NO )?DIVERGENCE$", out, re.M), out  # decided, [solver] as shipped
 
 
 @pytest.mark.parametrize("name", sorted(n for n, (c, _) in TABLE.items() if c == "meicp lattice"))

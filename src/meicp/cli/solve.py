@@ -83,8 +83,9 @@ def register(sub) -> None:
     p.add_argument("--target", type=finite,
                    help="shift of the active-set search's SLEPc solves (default 0)")
     p.add_argument("--nev", type=integer(1),
-                   help="eigenpairs per SLEPc solve; the vibration modes of a scene without contact "
-                        "(default: the scene's [solver] nev, else 4 / 6)")
+                   help="eigenpairs per SLEPc solve of the last divergence search, made only when the "
+                        "searches following one eigenpair found nothing; the vibration modes of a scene "
+                        "without contact (default: the scene's [solver] nev, else 1 / 6)")
     p.add_argument("--flutter-dense-max", type=integer(0), metavar="N",
                    help="retained DOFs up to which flutter takes the dense path: every eigenvalue, the "
                         "fastest growth proved, absence provable (default 2500; O(n³): ~1 min at 3,300)")

@@ -250,6 +250,7 @@ def check_options(*, tol, lam_min=None, **kwargs) -> None:
     if lam_min is not None and kwargs.get("lam_max") is not None and kwargs["lam_max"] < lam_min:
         raise ProblemError(f"lam_max = {kwargs['lam_max']!r} is below lam_min = {lam_min!r}")
     for name, minimum, maximum in (("nev", 1, None), ("max_iter", 1, None), ("give_up_after", 1, None),
+                                   ("converging_after", 1, None),
                                    ("max_j", 0, limits.MAX_ENUMERATED),
                                    ("n_starts", 1, None), ("memory", 1, None)):
         if kwargs.get(name) is not None:

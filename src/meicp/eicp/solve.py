@@ -83,7 +83,7 @@ def solve_eicp(A, B, *, J=None, method: str = "auto", all_solutions: bool = Fals
         the nearest): ``lam_max``, ``max_j`` (enumerate: raises its limit of pairs, and
         accepts the cost: without it an enumeration past ``limits.ENUMERATE_MAX_FLOPS``,
         about an hour, is refused before any work); ``target``, ``nev``, ``max_iter``,
-        ``give_up_after``, ``support0``, ``options`` (PETSc options), ``prefix``, ``follow``
+        ``give_up_after``, ``converging_after``, ``support0``, ``options`` (PETSc options), ``prefix``, ``follow``
         (active-set); ``starts``, ``n_starts``, ``seed``, ``sense``, ``spg_tol``,
         ``memory`` (rayleigh); ``x0``, ``lam0``, ``snes_type`` (semismooth).  ``auto``
         hands them to every method it runs.

@@ -59,7 +59,8 @@ def _spurious_value(problem: EiCPProblem, target: float) -> float:
 def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float = 0.0, nev: int = 4,
                lam_min: float | None = None, support0=None, max_iter: int = 100, comm=None,
                options: dict | None = None, prefix: str = ACTIVE_SET, follow: bool = True,
-               give_up_after: int | None = None, **_ignored) -> EiCPResult:
+               give_up_after: int | None = None, converging_after: int | None = None,
+               **_ignored) -> EiCPResult:
     """One certified MEiCP solution by the active-set search (see the module docstring).
 
     target: shift of the eigen-solves; nev: eigenpairs per solve; lam_min: ignore eigenpairs
@@ -69,12 +70,15 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
     eigenvalue) — most of a solve's cost is shift-and-invert applications, and a shift next
     to the wanted eigenvalue needs a handful of them.  give_up_after: end an eigen-solve after
     that many Krylov–Schur restarts when no Ritz value estimates an eigenvalue ≥ lam_min
-    (:class:`~meicp.petsc.reduced_pencil.ReducedPencilSolver`; a quick first look, not a proof)."""
+    (:class:`~meicp.petsc.reduced_pencil.ReducedPencilSolver`; a quick first look, not a proof);
+    converging_after (with give_up_after): after that many restarts an eigen-solve goes on
+    only while a Ritz value ≥ lam_min converges fast (``reduced_pencil.FAST_CONVERGENCE``)."""
     scaled, E = normalised(problem)
     if E is not None:  # shifts and the spurious value would overflow: solve scaled, map λ back
         result = active_set(scaled, tol=tol, target=scaled_value(target, E), nev=nev,
                             lam_min=scaled_value(lam_min, E), support0=support0, max_iter=max_iter, comm=comm,
-                            options=options, prefix=prefix, follow=follow, give_up_after=give_up_after)
+                            options=options, prefix=prefix, follow=follow, give_up_after=give_up_after,
+                            converging_after=converging_after)
         return restore(problem, scaled, result, E, tol)
     t0 = time.perf_counter()
     J = problem.J
@@ -103,7 +107,8 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                                      spurious=_spurious_value(problem, target), nev=nev,
                                      prefix=prefix, options=options,
                                      give_up=None if give_up_after is None else
-                                     (give_up_after, 0.0 if lam_min is None else lam_floor(lam_min, scales)))
+                                     (give_up_after, 0.0 if lam_min is None else lam_floor(lam_min, scales),
+                                      converging_after))
         result.timings["setup"] = time.perf_counter() - t0
         for it in range(1, max_iter + 1):
             key = S.tobytes()

@@ -10,7 +10,9 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
 3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).
 4. **σ-window**, only where that proof stopped at some σ = c: a certified σ_max
    (:mod:`.sigma_window`); ``σ_max ≤ c`` completes the proof, else the search goes on from σ_max.
-5. **Whole search** with its whole budget.
+5. **Whole search** with its whole budget; then, only if the caller or the scene asked
+   ``nev`` > 1 and it found nothing, the same search with ``nev`` eigenpairs per solve (every
+   search before follows one: :mod:`.search`).
 6. Otherwise **undecided**, saying what was proved, with the friction up to which these
    contact states are proved free of divergence.
 
@@ -31,7 +33,7 @@ from ..problem import Pencil
 from . import steps
 from .condensed import prove_no_divergence
 from .enumeration import enumeration_is_small, named_method_verdict
-from .search import first_search, search_settings, whole_search
+from .search import first_search, search_settings, whole_search, widened_search
 from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate
 from .verdict import DivergenceVerdict
 
@@ -101,6 +103,17 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         last = whole_search(settings, first.tally)
         if last.found:
             return steps.mode_found(last, window)
-    reasons.append(f"the search from σ = {settings.target:.6g} over {last.tally.supports_visited} support(s) "
-                   f"found no mode ({last.eicp.status})")
+    if settings.widened_nev:
+        last = widened_search(settings, last.tally)
+        if last.found:
+            return steps.mode_found(last, window)
+    widened = f", the last with nev = {settings.widened_nev}," if settings.widened_nev else ""
+    reasons.append(f"the search from σ = {settings.target:.6g}{widened} over {last.tally.supports_visited} "
+                   f"support(s) found no mode ({last.eicp.status})")
+    if settings.full_budget is not None and (not settings.whole_search_left or last.eicp.status == "max_iterations"):
+        # the caller's or the scene's budget, not the search, ended it: say which option
+        why = (f"max_iterations = {settings.full_budget} (the [solver] table or the caller) ended the search "
+               f"after {last.tally.supports_visited} support(s): without it the search has its own budget")
+        log.warning("divergence undecided: %s", why)
+        reasons.append(why)
     return steps.undecided(pen, top, reasons, last, window, started)

@@ -8,6 +8,8 @@ raises the limit, or past ``limits.ENUMERATE_MAX_FLOPS`` of work (2^|J|·r³, ab
 
 from __future__ import annotations
 
+import logging
+
 from ...core import limits
 from ...core.errors import ProblemError
 from ...core.validation import as_int
@@ -16,6 +18,7 @@ from ...eicp.solve import solve_eicp
 from .modes import certified_modes
 from .verdict import DivergenceProof, DivergenceVerdict
 
+log = logging.getLogger("meicp")
 
 
 def enumeration_is_small(r: int, n_j: int) -> bool:
@@ -72,5 +75,7 @@ def named_method_verdict(pen, comm, chosen: str, lam_min: float, tol: float, opt
     if got.found:
         return verdict(got.listed, False, f"{chosen}: {len(got.found)} certified divergence mode(s){got.note}",
                        chosen, "certified mode(s)")
-    text = f"{chosen} found no mode with σ ≥ 0 ({eicp.status}); this is not a proof of stability"
+    text = (f"{chosen} found no mode with σ ≥ 0 ({eicp.status}); this is not a proof of stability: "
+            f"method {chosen!r} (the [solver] table or the caller) runs no proof, method 'auto' does")
+    log.warning("divergence undecided: method %r runs no proof of stability; method 'auto' does", chosen)
     return verdict([], None, text, "", text)

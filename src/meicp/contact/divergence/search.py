@@ -9,6 +9,12 @@ reduced problem.  The first search is short (``FIRST_SEARCH`` support updates,
 ``FIRST_EPS_MAX_IT`` restarts each, given up after ``FIRST_GIVE_UP`` restarts when every Ritz
 value estimates an eigenvalue below 0); the whole search, with the caller's budget, comes
 only after the condensed proof stopped.
+
+Both follow one eigenpair per solve.  A caller's or scene's ``nev`` > 1 only widens a last
+search, made when the whole one found nothing: each of the ``nev`` eigenpairs must converge,
+and beyond the rightmost they sit in the cluster of slow vibrations, where Krylov–Schur needs
+tens of restarts (docs/benchmarks-notes.md, "nev widens the last search": 87 restarts instead
+of 9 for the same mode of the shipped 10⁶-DOF scene coarsened to 4·10⁴ DOFs).
 """
 
 from __future__ import annotations
@@ -32,6 +38,12 @@ FIRST_EPS_MAX_IT = 6
 #: restart on, while a mode shows above 0 at once (docs/benchmarks-notes.md, "first search");
 #: the proof, or the whole search after it, decides
 FIRST_GIVE_UP = 1
+#: ... and past FIRST_EPS_MAX_IT restarts, up to this many, it goes on while a Ritz value
+#: above 0 converges fast (its error estimate falling ≥ 10× a restart): a mode of the shipped
+#: 10⁶-DOF scene coarsened to 4·10⁴ DOFs was at 8e-10 after six restarts and converged in
+#: nine, where stopping at six cost a condensed proof and a σ-window before the whole search
+#: found it (docs/benchmarks-notes.md, "first search")
+FIRST_EPS_MAX_IT_CONVERGING = 12
 
 log = logging.getLogger("meicp")
 
@@ -51,8 +63,9 @@ class Tally:
 @dataclass(frozen=True)
 class SearchSettings:
     """One pencil's search: its keywords for :func:`~meicp.eicp.solve.solve_eicp` (``target``,
-    ``nev``, ``options``, the caller's own), the whole search's budget of support updates
-    (None: the solver's default), and the clock of the verdict (for the log)."""
+    ``nev`` = 1, ``options``, the caller's own), the whole search's budget of support updates
+    (None: the solver's default), the ``nev`` > 1 of the last, widened search (None: no such
+    search), and the clock of the verdict (for the log)."""
 
     pen: object
     comm: object
@@ -60,6 +73,7 @@ class SearchSettings:
     tol: float
     keywords: dict
     full_budget: int | None
+    widened_nev: int | None
     started: float
 
     @property
@@ -80,18 +94,24 @@ class SearchSettings:
         """The same search from a certified σ_max."""
         return replace(self, keywords={**self.keywords, "target": sigma_max})
 
+    def widened(self) -> SearchSettings:
+        """The same search with the caller's ``nev`` eigenpairs per solve."""
+        return replace(self, keywords={**self.keywords, "nev": self.widened_nev})
+
 
 def search_settings(pen, scene, comm, lam_min: float, tol: float, options, shift: float,
                     started: float) -> SearchSettings:
     """The caller's keywords, completed: the shift at the estimated top of the window (the
-    top is the short run's Ritz value: placing the shift needs no certificate), the scene's
-    ``nev`` and ``[petsc]`` options; ``max_iter`` (else the scene's) is the whole budget."""
+    top is the short run's Ritz value: placing the shift needs no certificate), one
+    eigenpair per solve, the scene's ``[petsc]`` options; ``max_iter`` (else the scene's) is
+    the whole budget; ``nev`` (else the scene's) > 1 is the widened last search's."""
     keywords = dict(options)
     keywords.setdefault("target", shift)
-    keywords.setdefault("nev", scene.solver.nev or 1)
+    nev = keywords.pop("nev", None) or scene.solver.nev or 1
+    keywords["nev"] = 1
     keywords.setdefault("options", dict(scene.petsc))
     full_budget = keywords.pop("max_iter", scene.solver.max_iterations or None)
-    return SearchSettings(pen, comm, lam_min, tol, keywords, full_budget, started)
+    return SearchSettings(pen, comm, lam_min, tol, keywords, full_budget, int(nev) if nev > 1 else None, started)
 
 
 @dataclass(frozen=True)
@@ -116,15 +136,17 @@ def search(settings: SearchSettings, before: Tally, max_iter: int | None, *, fir
     pen = settings.pen
     budget = {} if max_iter is None else {"max_iter": max_iter}
     if first:
-        budget["options"] = {"eps_max_it": FIRST_EPS_MAX_IT, **settings.keywords["options"]}
+        budget["options"] = {"eps_max_it": FIRST_EPS_MAX_IT_CONVERGING, **settings.keywords["options"]}
         budget["give_up_after"] = FIRST_GIVE_UP
+        budget["converging_after"] = FIRST_EPS_MAX_IT
     eicp = solve_eicp(pen.A, pen.B, J=pen.maps.J, method="active-set", lam_min=0.0, tol=settings.tol,
                       comm=settings.comm, **{**settings.keywords, **budget})
     if eicp.coverage.get("option_error"):
         raise PetscOptionError(eicp.message)
     got = certified_modes(eicp, pen, settings.lam_min)
-    log.info("divergence: search from σ = %.6g, %d mode(s), %s Krylov–Schur restart(s)%s (%.2f s)",
-             settings.target, len(got.found), eicp.coverage.get("eps_iterations", "?"),
+    log.info("divergence: search from σ = %.6g%s, %d mode(s), %s Krylov–Schur restart(s)%s (%.2f s)",
+             settings.target, "" if settings.keywords["nev"] == 1 else f" with nev = {settings.keywords['nev']}",
+             len(got.found), eicp.coverage.get("eps_iterations", "?"),
              ", given up: no Ritz value above 0" if eicp.coverage.get("gave_up") else "",
              time.perf_counter() - settings.started)
     return SearchOutcome(eicp, before.after(eicp), got, settings.target)
@@ -139,3 +161,9 @@ def first_search(settings: SearchSettings) -> SearchOutcome:
 def whole_search(settings: SearchSettings, before: Tally) -> SearchOutcome:
     """The search with its whole budget, after the proofs stopped."""
     return search(settings, before, settings.full_budget)
+
+
+def widened_search(settings: SearchSettings, before: Tally) -> SearchOutcome:
+    """The last search, with the caller's ``nev`` eigenpairs per solve and the whole budget:
+    only when the searches that follow one eigenpair found nothing."""
+    return search(settings.widened(), before, settings.full_budget)
