@@ -13,10 +13,12 @@ For every contact (a base node, or a frictional interface pair in relative coord
 |            | slip s (column s·e_t)                   |                                |               |
 
 Dirichlet DOFs are removed; every other DOF is free with a unit column and row.  The
-frictional interfaces enter through the change of variables ``u = T u'`` with
-``u_upper = u'_lower + d``; the maps are then ``Q̃ = T Q`` and ``P̃ = P Tᵀ`` in natural
-numbering, and the pencil is ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (B is diagonal for a base
-contact with lumped M, and nonsymmetric once an interface couples u_lower and d).
+frictional interfaces enter through the change of variables ``u = T u'`` of
+:func:`interface_transform` (per pair: the centre of mass and the relative displacement d);
+the maps are then ``Q̃ = T Q`` and ``P̃ = P Tᵀ`` in natural numbering, and the pencil is
+``A = −P̃ K Q̃``, ``B = P̃ M Q̃``.  With lumped M, B is diagonal and positive for a base contact
+and for an interface alike (``TᵀMT`` is diagonal), except where a node belongs to two pairs
+(a one-row layer between two interfaces): there ``u_upper = u_lower + d`` and M couples them.
 
 μ stays data: :class:`ReducedSystem` keeps the friction-free rows P̃₀, the unit-friction rows
 P̃₁ (one ``e_nᵀ`` per slip row) and the μ of each complementarity row (the only rows friction
