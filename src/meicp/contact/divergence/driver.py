@@ -31,7 +31,7 @@ from ..problem import Pencil
 from . import steps
 from .condensed import prove_no_divergence
 from .enumeration import enumeration_is_small, named_method_verdict
-from .search import first_search, search_settings, whole_search
+from .search import first_search, search_settings, searches_below, whole_search
 from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate
 from .verdict import DivergenceVerdict
 
@@ -101,6 +101,12 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         last = whole_search(settings, first.tally)
         if last.found:
             return steps.mode_found(last, window)
-    reasons.append(f"the search from σ = {settings.target:.6g} over {last.tally.supports_visited} support(s) "
+    lower = []
+    if last.eicp.status == "not_converged":
+        last, lower = searches_below(settings, last)
+        if last.found:
+            return steps.mode_found(last, window)
+    below = f" and from {len(lower)} lower shift(s) down to {lower[-1]:.3g}" if lower else ""
+    reasons.append(f"the search from σ = {settings.target:.6g}{below} over {last.tally.supports_visited} support(s) "
                    f"found no mode ({last.eicp.status})")
     return steps.undecided(pen, top, reasons, last, window, started)

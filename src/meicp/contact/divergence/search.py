@@ -32,6 +32,11 @@ FIRST_EPS_MAX_IT = 6
 #: restart on, while a mode shows above 0 at once (docs/benchmarks-notes.md, "first search");
 #: the proof, or the whole search after it, decides
 FIRST_GIVE_UP = 1
+#: where the search from the top ends with no real eigenpair nearest its shift (a nonsymmetric
+#: pencil at large μ: complex eigenvalues crowd the top of the window), short searches from
+#: these fractions of the top follow (a frictional interface at μ = 20, 10⁴ DOFs: the top at
+#: σ = 86, the mode at σ = 0.82, found from the shift 0.86)
+LOWER_SHIFTS = (1e-1, 1e-2, 1e-3)
 
 log = logging.getLogger("meicp")
 
@@ -139,3 +144,18 @@ def first_search(settings: SearchSettings) -> SearchOutcome:
 def whole_search(settings: SearchSettings, before: Tally) -> SearchOutcome:
     """The search with its whole budget, after the proofs stopped."""
     return search(settings, before, settings.full_budget)
+
+
+def searches_below(settings: SearchSettings, last: SearchOutcome) -> tuple[SearchOutcome, list[float]]:
+    """Short searches from shifts ``LOWER_SHIFTS`` times the window's top, lowest last, until
+    one certifies a mode: where the search from the top ends without a real eigenpair nearest
+    its shift.  Returns the last outcome and the shifts tried."""
+    tried = []
+    for factor in LOWER_SHIFTS:
+        if not settings.target > 0:
+            break
+        tried.append(settings.target * factor)
+        last = search(settings.from_top(tried[-1]), last.tally, settings.full_budget, first=True)
+        if last.found:
+            break
+    return last, tried
