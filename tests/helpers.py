@@ -54,3 +54,18 @@ def write_hdf5_problem(path, **arrays) -> None:
             else:
                 f[name] = np.asarray(value)
     tmp.replace(path)
+
+
+def interface_chain_scene(nx: int, mu: float, *, sides: str = "fixed", states="slip+"):
+    """Three layers with a one-row middle layer between two frictional interfaces: its nodes
+    belong to two pairs, where per-pair centres of mass do not compose (the fallback
+    coordinates of :func:`meicp.contact.maps.interface_transform`, B not diagonal)."""
+    from meicp.io.scene import scene_from_dict
+
+    layers = [("lower", 3, 2.0), ("middle", 1, 1.5), ("upper", 3, 1.0)]
+    return scene_from_dict({
+        "lattice": {"nx": nx},
+        "layers": [{"name": n, "rows": r, "stiffness": k, "density": 1.0} for n, r, k in layers],
+        "boundary": {"top": "fixed", "bottom": "fixed", "left": sides, "right": sides},
+        "interfaces": [{"below": n, "kind": "frictional", "friction": mu, "states": states}
+                       for n in ("lower", "middle")]})

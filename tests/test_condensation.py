@@ -23,6 +23,8 @@ from meicp.petsc.schur import dense_schur, mumps_factor
 
 from meicp.examples import two_layer_scene
 
+from .helpers import interface_chain_scene
+
 
 def split(nx=9, mu=1.3, states="slip-", shear=0.5, rows=(2, 2), **kw):
     scene = two_layer_scene(nx, rows, mu=mu, states=states, shear=shear, **kw)
@@ -180,13 +182,21 @@ def test_a_huge_tolerance_leaves_it_undecided():
     assert not prove_no_divergence(None, pencil(scene), 1.0, tol=0.9).proved
 
 
-def test_a_frictional_interface_is_undecided_beyond_sigma_zero():
-    scene = two_layer_scene(8, (2, 2), mu=0.5, states="slip+", shear=0.5,
-                            interface={"kind": "frictional", "friction": 0.3, "states": "slip+"})
-    proof = prove_no_divergence(None, pencil(scene), 1.0)
+def test_a_non_diagonal_b_is_undecided_beyond_sigma_zero():
+    """A one-row layer between two frictional interfaces keeps B non-diagonal (no per-pair
+    centre of mass there): the windows past σ = 0 are refused, saying why."""
+    proof = prove_no_divergence(None, pencil(interface_chain_scene(8, 3.0)), 1.0)
     assert not proof.proved and "diagonal B" in proof.statement
+
+
+def test_a_frictional_interface_is_proved_on_every_window():
+    """Centre-of-mass coordinates: B diagonal, so the σ-windows apply to an interface too."""
+    scene = two_layer_scene(8, (2, 2), bottom="fixed", stiffness=(2.0, 1.0), density=(1.0, 1.0),
+                            interface={"kind": "frictional", "friction": 3.0, "states": "slip+"})
+    proof = prove_no_divergence(None, pencil(scene), 1.0)
+    assert proof.proved and not has_mode(scene)
     with pytest.raises(ValueError, match="sigma_max"):
-        prove_no_divergence(None, pencil(scene), -1.0)
+        prove_no_divergence(None, pencil(interface_chain_scene(8, 3.0)), -1.0)
 
 
 def test_the_low_rank_schur_complement_is_the_full_rank_one_to_rounding():

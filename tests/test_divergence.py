@@ -18,6 +18,8 @@ from meicp.contact.problem import pencil
 from meicp.contact.result import InstabilityResult
 from meicp.examples import two_layer_scene
 
+from .helpers import interface_chain_scene
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -161,26 +163,34 @@ def test_without_a_window_the_proof_on_every_sigma_never_contradicts_enumeration
         assert window.stable == truth.stable, window.evidence
 
 
-@pytest.mark.parametrize("mu", [0.5, 3.0])
-def test_a_frictional_interface_past_16_contacts_gets_a_verdict_not_an_error(mu):
+@pytest.mark.parametrize("mu, test", [(0.5, "rayleigh-inertia"), (3.0, "condensed-windows"),
+                                      (20.0, "certified-mode")])
+def test_a_frictional_interface_past_16_contacts_is_decided(mu, test):
     """80 sliding interface pairs: at μ = 0.5 the Rayleigh bound proves stability; at μ = 3
-    sym(B) is indefinite (no Rayleigh quotient, and Lanczos on (sym A, sym B) breaks down —
-    it used to end in a PETSc error): undecided, with that reason.  The undecided sentence
-    is checked here."""
+    (sym B was indefinite in the old coordinates: undecided) the condensed windows do, and at
+    μ = 20 the search certifies σ = 0.30265 (B diagonal in centre-of-mass coordinates)."""
     from meicp.io.scene import loads_scene
 
     text = (ROOT / "data" / "scenes" / "frictional_interface.toml").read_text()
     text = text.replace("nx = 10", "nx = 80").replace("friction = 0.5", f"friction = {mu}")
     r = meicp.analyze(loads_scene(text), flutter=False)
+    assert r.divergence is (mu == 20.0) and r.proofs[0].test == test, r.evidence
+    if mu == 20.0:
+        assert abs(r.modes[0].sigma - 0.30265) < 1e-5
+
+
+def test_a_non_diagonal_b_past_16_contacts_gets_a_verdict_not_an_error():
+    """80 pairs on each side of a one-row layer between two interfaces (B not diagonal there)
+    at μ = 3: sym(B) is indefinite (no Rayleigh quotient, and Lanczos on (sym A, sym B) breaks
+    down — it used to end in a PETSc error): undecided, with that reason.  The undecided
+    sentence is checked here."""
+    r = meicp.analyze(interface_chain_scene(80, 3.0), flutter=False)
     proof = r.proofs[0]
-    if mu == 0.5:
-        assert r.divergence is False and proof.test == "rayleigh-inertia"
-    else:
-        assert r.divergence is None and proof.test == "" and r.evidence == proof.statement
-        assert proof.stable_friction_scale is not None and proof.eigen_solves >= 1
-        assert r.evidence.startswith("undecided: Rayleigh bound at 0: B is not proved positive definite")
-        assert "; no σ-window (λ_max(sym A, sym B) not estimated); condensed test: " in r.evidence
-        assert f"over {proof.supports_visited} support(s) found no mode ({r.eicp[0].status})" in r.evidence
+    assert r.divergence is None and proof.test == "" and r.evidence == proof.statement
+    assert proof.stable_friction_scale is not None and proof.eigen_solves >= 1
+    assert r.evidence.startswith("undecided: Rayleigh bound at 0: B is not proved positive definite")
+    assert "; no σ-window (λ_max(sym A, sym B) not estimated); condensed test: " in r.evidence
+    assert f"over {proof.supports_visited} support(s) found no mode ({r.eicp[0].status})" in r.evidence
 
 
 @pytest.mark.parametrize("top", ["fixed", "free"])
@@ -196,16 +206,14 @@ def test_a_rigid_motion_is_never_proved_away(top):
 
 
 def test_an_undecided_verdict_states_the_friction_up_to_which_stability_is_proved():
-    """Issue 14, item 3: 80 interface pairs at μ = 3 are undecided; the evidence gives the μ up
-    to which these states are proved stable (Rayleigh bound along μ).  Checked independently:
-    just below it the verdict at that μ is a Rayleigh proof, and 20 % above it the bound fails
-    (the proved set of μ is an interval from 0, and the search stops within 10 %)."""
-    from meicp.io.scene import loads_scene
-
-    text = (ROOT / "data" / "scenes" / "frictional_interface.toml").read_text().replace("nx = 10", "nx = 80")
+    """Issue 14, item 3: 80 pairs at μ = 3 on each side of a one-row layer between two
+    interfaces are undecided; the evidence gives the μ up to which these states are proved
+    stable (Rayleigh bound along μ).  Checked independently: just below it the verdict at that
+    μ is a Rayleigh proof, and 20 % above it the bound fails (the proved set of μ is an
+    interval from 0, and the search stops within 10 %)."""
 
     def at(mu):
-        return meicp.analyze(loads_scene(text.replace("friction = 0.5", f"friction = {mu}")), flutter=False)
+        return meicp.analyze(interface_chain_scene(80, mu), flutter=False)
 
     r = at(3.0)
     assert r.divergence is None

@@ -13,9 +13,9 @@ import meicp.lattice.assembly as lattice_assembly
 import meicp.petsc.assembly as petsc_assembly
 from meicp.core import limits
 from meicp.examples import two_layer_scene
-from meicp.io.scene import loads_scene
 
 from .conftest import ROOT
+from .helpers import interface_chain_scene
 
 SCENES = ROOT / "data" / "scenes"
 
@@ -37,10 +37,10 @@ def assemblies(monkeypatch):
 
 
 def test_the_undecided_path_of_analyze_assembles_once(assemblies):
-    """80 frictional interface pairs at μ = 3: the Rayleigh bound fails, the condensed proof is
-    tried, the verdict is undecided and the friction range is proved; flutter decided too."""
-    text = (SCENES / "frictional_interface.toml").read_text().replace("nx = 10", "nx = 80")
-    scene = loads_scene(text.replace("friction = 0.5", "friction = 3.0"))
+    """80 pairs on each side of a one-row layer between two frictional interfaces at μ = 3 (B
+    not diagonal there): the Rayleigh bound fails, the condensed proof is tried, the verdict is
+    undecided and the friction range is proved; flutter decided too."""
+    scene = interface_chain_scene(80, 3.0)
     r = meicp.analyze(scene)
     assert r.divergence is None and r.proofs[0].stable_friction
     assert assemblies == [(scene.nx, scene.ny)]

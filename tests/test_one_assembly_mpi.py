@@ -8,9 +8,9 @@ import pytest
 
 import meicp
 import meicp.petsc.assembly as petsc_assembly
-from meicp.io.scene import loads_scene
 
 from .conftest import ROOT
+from .helpers import interface_chain_scene
 
 pytestmark = pytest.mark.mpi(min_size=2)
 SCENES = ROOT / "data" / "scenes"
@@ -37,11 +37,11 @@ def counted(monkeypatch):
 
 
 def test_the_undecided_path_on_two_ranks_assembles_the_lattice_once(comm, counted):
-    """80 frictional interface pairs at μ = 3 (undecided: the Rayleigh bound, the condensed
-    proof and the friction range all run): one distributed assembly, one whole copy (the
-    condenser's); flutter's contact-strip proxy is a lattice of its own."""
-    text = (SCENES / "frictional_interface.toml").read_text().replace("nx = 10", "nx = 80")
-    scene = loads_scene(text.replace("friction = 0.5", "friction = 3.0"))
+    """80 pairs on each side of a one-row layer between two frictional interfaces at μ = 3
+    (undecided: the Rayleigh bound, the condensed proof and the friction range all run): one
+    distributed assembly, one whole copy (the condenser's); flutter's contact-strip proxy is a
+    lattice of its own."""
+    scene = interface_chain_scene(80, 3.0)
     r = meicp.analyze(scene, comm=comm)
     assert r.divergence is None
     mine = [c[0] for c in counted if c[1:] == (scene.nx, scene.ny)]

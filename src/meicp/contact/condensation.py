@@ -72,7 +72,8 @@ class PencilPieces:
 
     @property
     def mass_is_diagonal(self) -> bool:
-        """B diagonal for every μ: a base contact with lumped mass (the σ-windows need it)."""
+        """B diagonal for every μ: lumped mass, a base contact or an interface in centre-of-mass
+        coordinates (the σ-windows need it)."""
         off = self.Mt - sp.diags(self.Mt.diagonal())
         return off.count_nonzero() == 0 and self.NM.count_nonzero() == 0
 

@@ -2,8 +2,8 @@
 docs/critical-friction.md, "The flutter onset").
 
 The sliding pencil ``(σB(μ) − A(μ))x = 0`` depends on μ linearly: ``A(μ) = A₀ + μA₁``,
-``B(μ) = B₀ + μB₁`` (``B₁ = 0`` on a base contact with lumped mass, B then diagonal; a
-frictional interface puts μ into B).  A non-real σ can only appear where two real eigenvalues
+``B(μ) = B₀ + μB₁`` (``B₁ = 0`` with lumped mass, B then diagonal, on a base contact and an
+interface alike; a grazing contact, or a one-row layer between two interfaces, puts μ into B).  A non-real σ can only appear where two real eigenvalues
 meet, so an interval of μ on which every eigenvalue stays real and simple is flutter-free.
 :func:`cover_step` proves such an interval around one μ₀ from one dense eigen-decomposition:
 
@@ -63,7 +63,7 @@ class PencilFamily:
 
     @property
     def diagonal(self) -> bool:
-        """B independent of μ, diagonal and positive (a base contact with lumped mass)."""
+        """B independent of μ, diagonal and positive (lumped mass, no grazing contact)."""
         if self.B1.count_nonzero():
             return False
         d = self.B0.diagonal()

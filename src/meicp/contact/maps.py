@@ -13,10 +13,12 @@ For every contact (a base node, or a frictional interface pair in relative coord
 |            | slip s (column s·e_t)                   |                                |               |
 
 Dirichlet DOFs are removed; every other DOF is free with a unit column and row.  The
-frictional interfaces enter through the change of variables ``u = T u'`` with
-``u_upper = u'_lower + d``; the maps are then ``Q̃ = T Q`` and ``P̃ = P Tᵀ`` in natural
-numbering, and the pencil is ``A = −P̃ K Q̃``, ``B = P̃ M Q̃`` (B is diagonal for a base
-contact with lumped M, and nonsymmetric once an interface couples u_lower and d).
+frictional interfaces enter through the change of variables ``u = T u'`` of
+:func:`interface_transform` (per pair: the centre of mass and the relative displacement d);
+the maps are then ``Q̃ = T Q`` and ``P̃ = P Tᵀ`` in natural numbering, and the pencil is
+``A = −P̃ K Q̃``, ``B = P̃ M Q̃``.  With lumped M, B is diagonal and positive for a base contact
+and for an interface alike (``TᵀMT`` is diagonal), except where a node belongs to two pairs
+(a one-row layer between two interfaces): there ``u_upper = u_lower + d`` and M couples them.
 
 μ stays data: :class:`ReducedSystem` keeps the friction-free rows P̃₀, the unit-friction rows
 P̃₁ (one ``e_nᵀ`` per slip row) and the μ of each complementarity row (the only rows friction
@@ -113,6 +115,7 @@ def reduced_system(model, lines: list[ContactLine], grazing_case: tuple = ()) ->
     n = model.n_dofs
     keep = np.ones(n, dtype=bool)
     keep[model.constrained_dofs()] = False
+    T, keep = interface_transform(model, lines, keep)
     # per DOF: column sign (0 removed / ±1), complementarity flag, row: the friction entry μ·e_n
     col_sign = keep.astype(np.int8)
     comp = np.zeros(n, dtype=bool)
@@ -162,7 +165,6 @@ def reduced_system(model, lines: list[ContactLine], grazing_case: tuple = ()) ->
     P1 = sp.csr_matrix((np.ones(slip.size), (pos[slip], normal)), shape=(r, n))
     row_mu = np.zeros(r)
     row_mu[pos[slip]] = [m for _, m in row_extra.values()]
-    T = interface_transform(model, lines)
     if T is not None:
         Q = (T @ Q).tocsr()
         P0 = (P0 @ T.T).tocsr()
@@ -171,17 +173,81 @@ def reduced_system(model, lines: list[ContactLine], grazing_case: tuple = ()) ->
     return ReducedSystem(Q, P0, P1, row_mu[J], retained, J, [pair_of[d] for d in retained[J]], tuple(grazing_case))
 
 
-def interface_transform(model, lines: list[ContactLine]) -> sp.csr_matrix | None:
-    """``T`` with ``u = T u'``: the upper node of each frictional pair carries
-    ``d = u_upper − u_lower`` in u', so ``u_upper = u'_upper + u'_lower``.  None without
-    frictional interfaces."""
+def interface_transform(model, lines: list[ContactLine], keep: np.ndarray) -> tuple[sp.csr_matrix | None, np.ndarray]:
+    """``(T, kept)``: the change of variables ``u = T u'`` of the frictional interfaces and which
+    slots of u' stay (``keep``, natural numbering, marks the DOFs no boundary holds).  None and
+    ``keep`` without frictional interfaces.
+
+    Each pair carries its relative displacement ``d = u_upper − u_lower`` in the upper node's
+    slot, so the contact algebra is the base's.  The lower node's slot carries, per component,
+
+    - the centre of mass ``c = (m_l u_l + m_u u_u)/m`` (``m = m_l + m_u``, lumped) when both
+      DOFs are free: ``u_l = c − (m_u/m) d``, ``u_u = c + (m_l/m) d``, and ``TᵀMT`` is
+      ``diag(m, m_l m_u/m)`` — B stays diagonal;
+    - nothing when the lower DOF is held (``d = u_u``), and when only the upper DOF is held
+      ``d = −u_l`` takes the upper slot and the lower slot is dropped;
+    - ``u_lower`` itself (``u_upper = u_lower + d``, the inverse of ``u' = (I − E) u``) when a
+      node of the pair belongs to another contact too — a one-row layer between two frictional
+      interfaces, or the base's contact node under a one-row layer.  Per-pair centres of mass
+      do not compose there: the mass couples ``u_lower`` and ``d`` and B is not diagonal (the
+      Rayleigh bound and the σ-windows then check sym(B) instead of relying on it).
+
+    Only ``T⁻¹``'s rows for the d slots matter to the contact laws (``e_uᵀ − e_lᵀ``): with them
+    ``P̃ = P Tᵀ`` reads the interface reaction ``r`` off ``w = Cᵀ r`` exactly as for the base.
+    """
     pairs = [(line.upper, line.lower) for line in lines if line.lower is not None]
     if not pairs:
-        return None
+        return None, keep
     n = model.n_dofs
-    upper = np.concatenate([p[0] for p in pairs])
-    lower = np.concatenate([p[1] for p in pairs])
-    rows = np.concatenate([2 * upper, 2 * upper + 1])
-    cols = np.concatenate([2 * lower, 2 * lower + 1])
-    E = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
-    return (sp.identity(n, format="csr") + E).tocsr()
+    upper = np.concatenate([p[0] for p in pairs]).astype(np.int64)
+    lower = np.concatenate([p[1] for p in pairs]).astype(np.int64)
+    uses = np.bincount(np.concatenate([upper, lower] + [line.upper for line in lines if line.lower is None]),
+                       minlength=model.n_nodes)
+    own = (uses[upper] == 1) & (uses[lower] == 1)  # a pair no other contact touches
+    mass = model.mass()
+    kept = keep.copy()
+    diag = np.ones(n)
+    rows, cols, vals = [], [], []  # off-diagonal entries of T
+    coupled_u, coupled_l = [], []
+    for comp in (0, 1):
+        du, dl = 2 * upper + comp, 2 * lower + comp
+        both = keep[du] & keep[dl]
+        com = own & both
+        ml, mu_ = mass[lower[com]], mass[upper[com]]
+        # u_l = c − (m_u/s) d', u_u = c + (m_l/s) d' with s the power of 2 nearest m = m_l + m_u:
+        # the slot carries d' = (s/m)·d, a positive multiple of d (the contact laws do not see
+        # it), and cᵀMd' = (−m_l·m_u + m_u·m_l)/s is exactly 0 in floating point, so B's
+        # off-diagonal entries vanish exactly, not to rounding
+        s = np.exp2(np.round(np.log2(ml + mu_)))
+        rows += [du[com], dl[com]]
+        cols += [dl[com], du[com]]
+        vals += [np.ones(com.sum()), -mu_ / s]
+        diag[du[com]] = ml / s
+        upper_held = keep[dl] & ~keep[du]
+        if np.any(upper_held & ~own):
+            raise ProblemError("a frictional interface node held by the boundary while its partner also "
+                               "touches another contact (a one-row layer between two contacts with a fixed "
+                               "side): this change of variables cannot express it")
+        # u_u = 0: d = −u_l takes the upper slot, the lower slot goes
+        h = upper_held
+        rows.append(dl[h])
+        cols.append(du[h])
+        vals.append(-np.ones(h.sum()))
+        diag[du[h]] = 0.0
+        kept[du[h]], kept[dl[h]] = True, False
+        chain = ~own & both
+        coupled_u.append(du[chain])
+        coupled_l.append(dl[chain])
+    T = (sp.diags(diag) + sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                         shape=(n, n))).tocsr()
+    cu, cl = np.concatenate(coupled_u), np.concatenate(coupled_l)
+    if cu.size:
+        # u' = (I − E) u on these pairs: T = (I − E)⁻¹ = I + E + E² + … (E nilpotent: a chain
+        # of interfaces through one-row layers)
+        E = sp.csr_matrix((np.ones(cu.size), (cu, cl)), shape=(n, n))
+        term, series = E, sp.identity(n, format="csr") + E
+        while (term := (term @ E).tocsr()).nnz:
+            series = series + term
+        T = (T @ series).tocsr()
+    T.eliminate_zeros()
+    return T.tocsr(), kept

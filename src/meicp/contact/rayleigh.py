@@ -61,7 +61,8 @@ def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True) -> SignProo
     """Whether ``sym(A) − τ·sym(B) ≺ 0`` with ``sym(B) ≻ 0``, both with a margin above rounding.
 
     Proved: no MEiCP solution has σ ≥ τ (τ = 0: no divergence mode at all).  Holds for a
-    nonsymmetric pencil, a frictional interface's non-diagonal B included.  A, B: SciPy or
+    nonsymmetric pencil, a non-diagonal B included (a one-row layer between two frictional
+    interfaces).  A, B: SciPy or
     PETSc (collective).  ``decisive=False`` spares the second factorisation that tells a
     borderline case (None) from a clear failure (False): a caller that only acts on
     ``proved is True`` gets False for both, with ``above`` the eigenvalues not proved below

@@ -139,7 +139,7 @@ def active_set(problem: EiCPProblem, *, tol: float = DEFAULT_TOL, target: float 
                 break
             # every returned pair is examined: a violation-free one (largest λ first) ends
             # the search; otherwise the largest λ drives the support update
-            examined = sorted((_violations(problem, S, removed, lam, xi, scales) + (err,)
+            examined = sorted((_violations(problem, S, removed, lam, xi, scales, tol) + (err,)
                                for lam, xi, err in pairs), key=lambda v: -v[0])
             clean = [v for v in examined if v[3].size == 0 and v[4].size == 0]
             lam, xi, w, leave, enter, err = clean[0] if clean else examined[0]
@@ -200,14 +200,16 @@ def _petsc_error_message(exc, it: int, support: int, prefix: str) -> str:
     return f"{where}{detail}; {hint}"
 
 
-def _violations(problem, S, removed, lam, xi, scales):
-    """Orient ξ (eᵀξ_S > 0) and list the sign violations in S and dual violations off S."""
+def _violations(problem, S, removed, lam, xi, scales, tol=1e-10):
+    """Orient ξ (eᵀξ_S > 0) and list the sign violations in S and dual violations off S.  An
+    index leaves below −min(1e-9, tol/2)·max|ξ|: the certificate rejects x_j < −tol·‖x‖₂, so a
+    looser test ended on a support it could not certify (an interface at μ = 20: x_j ≈ −3e-10)."""
     if (S.size and xi[S].sum() < 0) or (S.size == 0 and xi[np.argmax(np.abs(xi))] < 0):
         xi = -xi
     w = problem.residual_vector(lam, xi)
     scale_x = np.abs(xi).max()
     s = scales[0] + abs(lam) * scales[1]
-    leave = S[xi[S] < -1e-9 * scale_x] if S.size else S
+    leave = S[xi[S] < -min(1e-9, 0.5 * tol) * scale_x] if S.size else S
     enter = removed[w[removed] < -1e-9 * s * scale_x] if removed.size else removed
     return lam, xi, w, leave, enter
 

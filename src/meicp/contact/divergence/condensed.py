@@ -66,8 +66,9 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     Contract: ``proved=True`` is a proof (every certificate re-checked with its margin; with
     the Schur method the condensation error is measured, as the statement says);
     ``proved=False`` proves nothing either way (a mode may or may not exist) and says why.
-    T2 needs a base contact with lumped mass (B diagonal: M̃ diagonal, N_M = 0); with a
-    frictional interface only σ_max = 0 can be proved (T1), a wider window is undecided.
+    T2 needs B diagonal (lumped mass: M̃ diagonal, N_M = 0) — a base contact or a frictional
+    interface in centre-of-mass coordinates; where a one-row layer lies between two interfaces
+    B is not diagonal and only σ_max = 0 can be proved (T1), a wider window is undecided.
     """
     comm = mpi_comm(comm)
     rank = 0 if comm is None else comm.Get_rank()
@@ -82,9 +83,9 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
 
 def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedProof:
     if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
-        return CondensedProof(False, "", "the σ-window certificates need a diagonal B (a base contact with lumped "
-                               "mass); this pencil couples contact and free DOFs through its mass (a frictional "
-                               "interface): only σ = 0 can be certified, the window is undecided", np.nan, 0, ())
+        return CondensedProof(False, "", "the σ-window certificates need a diagonal B (lumped mass); this pencil couples "
+                               "contact and free DOFs through its mass (a one-row layer between two frictional "
+                               "interfaces): only σ = 0 can be certified, the window is undecided", np.nan, 0, ())
     if not cond.prepare(need_tau=sigma_max > 0):
         return CondensedProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()

@@ -33,7 +33,7 @@ from ..problem import Pencil
 from . import steps
 from .condensed import prove_no_divergence
 from .enumeration import enumeration_is_small, named_method_verdict
-from .search import first_search, search_settings, whole_search, widened_search
+from .search import first_search, search_settings, searches_below, whole_search, widened_search
 from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate
 from .verdict import DivergenceVerdict
 
@@ -103,12 +103,18 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         last = whole_search(settings, first.tally)
         if last.found:
             return steps.mode_found(last, window)
+    lower = []
+    if last.eicp.status == "not_converged":
+        last, lower = searches_below(settings, last)
+        if last.found:
+            return steps.mode_found(last, window)
     if settings.widened_nev:
         last = widened_search(settings, last.tally)
         if last.found:
             return steps.mode_found(last, window)
+    below = f" and from {len(lower)} lower shift(s) down to {lower[-1]:.3g}" if lower else ""
     widened = f", the last with nev = {settings.widened_nev}," if settings.widened_nev else ""
-    reasons.append(f"the search from σ = {settings.target:.6g}{widened} over {last.tally.supports_visited} "
+    reasons.append(f"the search from σ = {settings.target:.6g}{below}{widened} over {last.tally.supports_visited} "
                    f"support(s) found no mode ({last.eicp.status})")
     if settings.full_budget is not None and (not settings.whole_search_left or last.eicp.status == "max_iterations"):
         # the caller's or the scene's budget, not the search, ended it: say which option

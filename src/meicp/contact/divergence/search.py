@@ -44,6 +44,11 @@ FIRST_GIVE_UP = 1
 #: nine, where stopping at six cost a condensed proof and a σ-window before the whole search
 #: found it (docs/benchmarks-notes.md, "first search")
 FIRST_EPS_MAX_IT_CONVERGING = 12
+#: where the search from the top ends with no real eigenpair nearest its shift (a nonsymmetric
+#: pencil at large μ: complex eigenvalues crowd the top of the window), short searches from
+#: these fractions of the top follow (a frictional interface at μ = 20, 10⁴ DOFs: the top at
+#: σ = 86, the mode at σ = 0.82, found from the shift 0.86)
+LOWER_SHIFTS = (1e-1, 1e-2, 1e-3)
 
 log = logging.getLogger("meicp")
 
@@ -167,3 +172,18 @@ def widened_search(settings: SearchSettings, before: Tally) -> SearchOutcome:
     """The last search, with the caller's ``nev`` eigenpairs per solve and the whole budget:
     only when the searches that follow one eigenpair found nothing."""
     return search(settings.widened(), before, settings.full_budget)
+
+
+def searches_below(settings: SearchSettings, last: SearchOutcome) -> tuple[SearchOutcome, list[float]]:
+    """Short searches from shifts ``LOWER_SHIFTS`` times the window's top, lowest last, until
+    one certifies a mode: where the search from the top ends without a real eigenpair nearest
+    its shift.  Returns the last outcome and the shifts tried."""
+    tried = []
+    for factor in LOWER_SHIFTS:
+        if not settings.target > 0:
+            break
+        tried.append(settings.target * factor)
+        last = search(settings.from_top(tried[-1]), last.tally, settings.full_budget, first=True)
+        if last.found:
+            break
+    return last, tried

@@ -9,8 +9,9 @@ factorisation when the top is isolated; when it sits in the cluster of slow vibr
 Lanczos needs hundreds of restarts, so they are capped and the last Ritz value is used.  A
 Ritz value is a *lower* estimate — itself a Rayleigh quotient, so θ > 0 shows that sym(A) is
 not negative definite: the window claim is made by the Rayleigh bound at τ above θ
-(:func:`certified_top`, one LDLᵀ inertia each), never by the estimate.  Without sym(B) ≻ 0 (a
-frictional interface at large μ) no Rayleigh quotient bounds σ and Lanczos would break down:
+(:func:`certified_top`, one LDLᵀ inertia each), never by the estimate.  Without sym(B) ≻ 0 (a one-row
+layer between two frictional interfaces at large μ, where B is not diagonal) no Rayleigh
+quotient bounds σ and Lanczos would break down:
 nothing is estimated.
 """
 

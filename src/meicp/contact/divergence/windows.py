@@ -1,8 +1,9 @@
 """No MEiCP solution with σ in a window [σ_a, σ_b], from condensations at its ends
 (:mod:`.condensation`).
 
-Base contact with lumped mass (B diagonal, N_M = 0, M̃_FJ = 0).  In the M̃_F-orthonormal modes
-(ψ_i, λ_i) of (K̃_FF, M̃_F), for σ ≥ σ_a
+Lumped mass, a base contact or a frictional interface in centre-of-mass coordinates (B
+diagonal, N_M = 0, M̃_FJ = 0).  In the M̃_F-orthonormal modes (ψ_i, λ_i) of (K̃_FF, M̃_F), for
+σ ≥ σ_a
 
     G(σ) = G(σ_a) + (σ − σ_a) M_J + Σ_i φ_i(σ) w_i,   φ_i(σ) = (σ − σ_a)/(σ + λ_i),
     w_i = (K̃ + μN)_JF ψ_i ψ_iᵀ K̃_FJ / (σ_a + λ_i),
