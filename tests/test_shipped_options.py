@@ -46,10 +46,11 @@ def test_the_shipped_solver_table_costs_no_more_than_the_defaults():
     assert _restarts(with_table) <= _restarts(without)
 
 
-@pytest.mark.parametrize("nev, expected", [(None, [1, 1]), (3, [1, 1, 3])])
+@pytest.mark.parametrize("nev, expected", [(None, [1] * 5), (3, [1] * 5 + [3])])
 def test_nev_widens_only_the_last_search(monkeypatch, nev, expected):
     """On a pencil whose proofs stop (the condensed proof reported stopped at σ = 1e-3), the
-    first and whole searches follow one eigenpair per solve; a caller's nev > 1 adds a last
+    first and whole searches, and the three from lower shifts after them, follow one eigenpair
+    per solve; a caller's nev > 1 adds a last
     search with nev eigenpairs per solve, and the undecided evidence says so."""
     asked = []
     real = search_module.solve_eicp
@@ -103,12 +104,15 @@ def test_the_first_search_goes_on_while_a_mode_converges_fast():
     assert np.isclose(r.modes[0].sigma, going_on.solutions[0].lam, rtol=1e-8)
 
 
-def test_an_option_that_leaves_the_verdict_undecided_is_named(caplog):
+def test_an_option_that_leaves_the_verdict_undecided_is_named(caplog, monkeypatch):
     """A budget of one support update decides nothing where the mode is two supports away,
     and a method by name that runs no proof decides no stable scene: the undecided evidence
     (and a warning) names the option, where the defaults decide."""
     unstable = two_layer_scene(200, (10, 10), mu=2.0, states="slip+", shear=0.0)
     assert meicp.analyze(unstable, flutter=False).divergence is True
+    # the searches from lower shifts find this mode within one update: without them the budget
+    # is what ends the search, and that is what the evidence must name
+    monkeypatch.setattr(search_module, "LOWER_SHIFTS", ())
     with caplog.at_level("WARNING", logger="meicp"):
         r = meicp.analyze(unstable, flutter=False, max_iter=1)
     assert r.divergence is None and "max_iterations = 1 (the [solver] table or the caller) ended" in r.evidence
