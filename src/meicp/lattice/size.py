@@ -90,10 +90,11 @@ def _bytes(n: float) -> str:
 #: and 4.1 GB on 1 rank, 22.9 s and 2.9 GB per rank on 2), with time ∝ n^1.15 and memory ∝
 #: n^1.05 measured from 10⁴ to 10⁶ DOFs
 MEASURED_ANALYSIS = {1: (36.5, 4.1e9), 2: (22.9, 2.9e9)}
-#: the static frictional equilibrium (``states = "solve"``, the sparse mixed LCP) at 10⁶ DOFs on
-#: 2 ranks, added to the analysis: up to 161 s and 6.9 GB per rank (docs/benchmarks.md,
-#: data/scenes/extensive_solve.toml); assumed to grow like the analysis
-MEASURED_STATIC = (161.0, 6.9e9)
+#: the static frictional equilibrium (``states = "solve"``, the Schur formulation) at 10⁶ DOFs on
+#: 2 ranks, added to the analysis: 13–16 s, 2.2 GB per rank (docs/benchmarks.md,
+#: "The shipped scenes": extensive_solve.toml and extensive_interface.toml; the sparse mixed
+#: LCP took 161 s and 6.9 GB); assumed to grow like the analysis
+MEASURED_STATIC = (16.0, 2.2e9)
 TIME_EXPONENT, MEMORY_EXPONENT = 1.15, 1.05
 #: at or below this many DOFs a run takes about a second and the estimate is not worth a line
 SMALL_DOFS = 10_000
