@@ -522,3 +522,29 @@ def test_interface_proxy_is_cut_where_the_interface_slides():
     based = two_layer_scene(100, (6, 7), mu=1.0, interface={"kind": "frictional", "friction": 0.5, "states": states})
     lines = contact_lines(based, LatticeModel(based))
     assert fl.interface_proxy(based, lines[1]) is None
+
+
+def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monkeypatch):
+    """From FLUTTER_OFF_CLUSTER_FROM retained DOFs an interface-strip proxy's target is searched
+    where it is, for one eigenpair with a basis of INTERFACE_NCV (a base proxy's is moved up);
+    the modes it certifies are QZ's."""
+    monkeypatch.setattr(limits, "FLUTTER_OFF_CLUSTER_FROM", 50)
+    monkeypatch.setattr(limits, "FLUTTER_SEARCH_LARGE", 50)
+    seen = []
+    real = fl.search_flutter
+
+    def spy(A, B, targets, comm=None, **kw):
+        seen.append((list(targets), kw))
+        return real(A, B, targets, comm, **kw)
+
+    monkeypatch.setattr(fl, "search_flutter", spy)
+    scene = _interface_scene(40, (4, 4), 1.0)
+    with pencil(scene) as pen:
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+        ref = fl.pencil_flutter(pen, scene)
+        tau = complex(fl.proxy_targets(scene, None, 1, lines=pen.lines)[0])
+    (targets, kw), = seen
+    assert targets == [tau] and kw["nev"] == 1 and kw["ncv"] == fl.INTERFACE_NCV
+    assert "searched at its σ for one eigenpair" in got.evidence
+    assert got.flutter is True and got.modes
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)

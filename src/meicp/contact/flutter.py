@@ -78,6 +78,11 @@ SAME = 1e-9
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
 OFF_CLUSTER_NCV = 16
+#: an interface-strip proxy's target at that size is searched where it is, for one eigenpair
+#: with a basis of INTERFACE_NCV: on the seeds' scene (extensive_interface.toml) coarsened to
+#: 3·10⁵ DOFs, 1 restart and 38 s against 6 restarts and 66 s moved off with OFF_CLUSTER_NCV
+#: (docs/benchmarks-notes.md, "INTERFACE_NCV")
+INTERFACE_NCV = 24
 #: SLEPc restarts at a target that may still be moved off its cluster, and at the last one
 #: (SLEPc's own default before either was named).  A cap of 40 before a move was tried and
 #: did not pay: on a lattice outside the benchmark family the target it left converged in
@@ -496,7 +501,12 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
         targets = proxy_targets(scene, None, count, lines=pen.lines)
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
-        if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM:
+        interface = not any(line.name == BASE for line in pen.lines)
+        if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM and interface:
+            why += f", searched at its σ for one eigenpair with a basis of {INTERFACE_NCV}"
+            search.setdefault("nev", 1)
+            search.setdefault("ncv", INTERFACE_NCV)
+        elif targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM:
             moved = [off_cluster(t, 0) for t in targets]
             why += (f", each moved up off its cluster before the first solve ({n:,} ≥ "
                     f"{limits.FLUTTER_OFF_CLUSTER_FROM:,} retained "
