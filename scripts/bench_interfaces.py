@@ -8,6 +8,7 @@
         family --sizes 1000:250+250 --cases 6:slip-:1 6:slip+:20 --reference   # 10⁶ DOFs, 2 ranks
     PYTHONPATH=OTHER/src .venv/bin/python scripts/bench_interfaces.py named --code main  # before
     .venv/bin/python scripts/bench_interfaces.py named --code branch                     # after
+    .venv/bin/python scripts/bench_interfaces.py check --count 8 --pairs 13 16   # -> interfaces_check.csv
     .venv/bin/python scripts/bench_interfaces.py chart
 
 Family: ``two_layer_scene`` with the bottom and top rows fixed, sides free, the interface
@@ -36,6 +37,8 @@ from meicp.petsc.mat import mat_from_scipy
 
 FAMILY = ["nx", "rows", "dofs", "pairs", "ranks", "contrast", "state", "mu", "divergence", "test", "sigma",
           "seconds", "eigensolve_s", "ratio", "load1", "evidence"]
+CHECK = ["seed", "nx", "rows", "sides", "contrast", "state", "mu", "truth", "window", "agree", "test",
+         "enumerate_s", "window_s"]
 NAMED = ["case", "code", "nx", "rows", "dofs", "contrast", "state", "mu", "divergence", "test", "sigma", "seconds",
          "load1", "evidence"]
 MUS = np.geomspace(0.05, 20.0, 6)
@@ -174,6 +177,39 @@ def chart(args):
     save_figure(fig, csv_path("interfaces_family").with_suffix(".png"))
 
 
+def check(args):
+    """The window procedure against enumeration past the test suite's 10 pairs (the suite's
+    property test draws 3–10): random interfaces of ``--pairs`` pairs, 1–2 rows per layer."""
+    rng = np.random.default_rng(args.seed)
+    rows = []
+    for k in range(args.count):
+        nx = int(rng.integers(args.pairs[0], args.pairs[1] + 1))
+        lr = (int(rng.integers(1, 3)), int(rng.integers(1, 3)))
+        sides = str(rng.choice(["free", "fixed"]))
+        contrast, state = str(rng.choice(list(CONTRASTS))), str(rng.choice(["slip+", "slip-"]))
+        mu = float(np.exp(rng.uniform(np.log(0.05), np.log(20.0))))
+        scene = two_layer_scene(nx, lr, bottom="fixed", sides=sides, stiffness=CONTRASTS[contrast],
+                                density=(1.0, 2.0), interface={"kind": "frictional", "friction": mu, "states": state})
+        t0 = time.perf_counter()
+        truth = meicp.analyze(scene, method="enumerate", flutter=False)
+        t1 = time.perf_counter()
+        window = meicp.analyze(scene, method="active-set", flutter=False)
+        t2 = time.perf_counter()
+        if window.divergence is None:
+            agree = "undecided"
+        elif window.divergence is True:
+            agree = str(truth.divergence is True and any(np.isclose(window.modes[0].sigma, m.sigma, rtol=1e-8,
+                                                                   atol=1e-12) for m in truth.modes))
+        else:
+            agree = str(truth.divergence is False)
+        rows.append(dict(seed=args.seed, nx=nx, rows=f"{lr[0]}+{lr[1]}", sides=sides, contrast=contrast, state=state,
+                         mu=f"{mu:.6g}", truth=truth.divergence, window=window.divergence, agree=agree,
+                         test=window.proofs[0].test if window.proofs else "", enumerate_s=f"{t1 - t0:.2f}",
+                         window_s=f"{t2 - t1:.2f}"))
+        print(rows[-1], flush=True)
+        write_rows(csv_path("interfaces_check"), rows[-1:], CHECK)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
@@ -184,6 +220,10 @@ def main():
     f.add_argument("--reference", action="store_true", help="time one SLEPc eigen-solve per lattice")
     n = sub.add_parser("named")
     n.add_argument("--code", default="branch", help="label of the meicp being measured (main, branch)")
+    c = sub.add_parser("check")
+    c.add_argument("--count", type=int, default=8)
+    c.add_argument("--pairs", type=int, nargs=2, default=[13, 16])
+    c.add_argument("--seed", type=int, default=33)
     sub.add_parser("chart")
     args = p.parse_args()
     globals()[args.what](args)

@@ -314,10 +314,9 @@ def test_search_on_even_and_odd_orders_with_and_without_low_rank_factors(parity,
     assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
 
 
-def test_large_pencils_start_above_the_cluster(monkeypatch):
-    """From FLUTTER_OFF_CLUSTER_FROM retained DOFs the proxy's target is moved up before the first
-    solve (one factorisation instead of two where it lies in a cluster), with a basis of
-    OFF_CLUSTER_NCV and a block-low-rank factor; the modes it certifies are QZ's."""
+def _large_and_spied(monkeypatch) -> list:
+    """Every pencil counts as large (FLUTTER_OFF_CLUSTER_FROM, FLUTTER_SEARCH_LARGE = 50); the
+    returned list receives (targets, keywords) of each search_flutter call."""
     monkeypatch.setattr(limits, "FLUTTER_OFF_CLUSTER_FROM", 50)
     monkeypatch.setattr(limits, "FLUTTER_SEARCH_LARGE", 50)
     seen = []
@@ -328,6 +327,14 @@ def test_large_pencils_start_above_the_cluster(monkeypatch):
         return real(A, B, targets, comm, **kw)
 
     monkeypatch.setattr(fl, "search_flutter", spy)
+    return seen
+
+
+def test_large_pencils_start_above_the_cluster(monkeypatch):
+    """From FLUTTER_OFF_CLUSTER_FROM retained DOFs the proxy's target is moved up before the first
+    solve (one factorisation instead of two where it lies in a cluster), with a basis of
+    OFF_CLUSTER_NCV and a block-low-rank factor; the modes it certifies are QZ's."""
+    seen = _large_and_spied(monkeypatch)
     scene = lattice(16, (3, 3), 2.0)
     with pencil(scene) as pen:
         assert pen.maps.retained.size >= 50
@@ -528,16 +535,7 @@ def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monke
     """From FLUTTER_OFF_CLUSTER_FROM retained DOFs an interface-strip proxy's target is searched
     where it is, for one eigenpair with a basis of INTERFACE_NCV (a base proxy's is moved up);
     the modes it certifies are QZ's."""
-    monkeypatch.setattr(limits, "FLUTTER_OFF_CLUSTER_FROM", 50)
-    monkeypatch.setattr(limits, "FLUTTER_SEARCH_LARGE", 50)
-    seen = []
-    real = fl.search_flutter
-
-    def spy(A, B, targets, comm=None, **kw):
-        seen.append((list(targets), kw))
-        return real(A, B, targets, comm, **kw)
-
-    monkeypatch.setattr(fl, "search_flutter", spy)
+    seen = _large_and_spied(monkeypatch)
     scene = _interface_scene(40, (4, 4), 1.0)
     with pencil(scene) as pen:
         got = fl.pencil_flutter(pen, scene, dense_max=0)
