@@ -10,9 +10,11 @@ import h5py
 import numpy as np
 import pytest
 
+import meicp
 import meicp.contact.critical_friction.solve as cf
 from meicp.contact.critical_friction import CriticalFriction, critical_friction
 from meicp.core import limits
+from meicp.core.errors import ProblemError
 
 from meicp.examples import two_layer_scene
 
@@ -150,3 +152,15 @@ def test_solve_keeps_its_analysis_when_the_critical_friction_fails(cli, tmp_path
     code, text, err = cli("solve", scenes / "two_layers.toml", "--critical-friction", "--json", "--no-output")
     doc = json.loads(text)
     assert code == 0 and doc["critical_friction"] == {"error": "μ as an eigenvalue and existence disagree"}
+
+
+SCENE_DIR = Path(__file__).resolve().parents[1] / "data" / "scenes"
+
+
+def test_critical_friction_of_a_scene_without_contact_is_refused():
+    """No rough base, no frictional interface: nothing for friction to be critical for — a
+    ProblemError naming what is missing, not the bisection check's ConvergenceError."""
+    with pytest.raises(ProblemError, match="needs a frictional contact"):
+        critical_friction(meicp.load_scene(SCENE_DIR / "four_node_cell.toml"))
+    with pytest.raises(ProblemError, match="needs a frictional contact"):
+        critical_friction(meicp.load_scene(SCENE_DIR / "embedded_layer.toml"))

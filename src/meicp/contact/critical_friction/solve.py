@@ -173,7 +173,14 @@ def _friction_states(scene) -> tuple[LatticeMatrices, tuple]:
         raise ProblemError(f"scene must be a Scene, got {type(scene).__name__} "
                            "(meicp.critical_friction also reads a scene file)")
     check_size(scene, memory=available_memory())  # serial SciPy: this process, no PETSc indices
-    lattice = LatticeMatrices(LatticeModel(scene))
+    model = LatticeModel(scene)
+    if model.boundary.bottom != "contact" and not any(i.kind == "frictional" for i in scene.interfaces):
+        # without friction there is no friction to be critical (the free 4-node cell's rigid
+        # motions once surfaced as a ConvergenceError of the bisection check)
+        raise ProblemError("critical_friction needs a frictional contact: boundary.bottom = \"contact\" or an "
+                           "[[interfaces]] entry with kind = \"frictional\"; this scene has neither "
+                           "(meicp.analyze gives it a modal analysis)")
+    lattice = LatticeMatrices(model)
     lines, static = contact_states(scene, lattice)
     if lines is None:
         raise ConvergenceError(f"static equilibrium failed: {static.message}", static)
