@@ -242,7 +242,7 @@ def test_a_target_whose_pairs_all_fail_the_gate_is_moved_off_the_cluster(monkeyp
     scene = lattice(32, (8, 8), 2.0)
     with pencil(scene) as pen:
         ref = fl.pencil_flutter(pen, scene)
-        tau = complex(fl.proxy_targets(scene, ["slip+"] * 32, 1)[0])
+        tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
         got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
         calls.clear()
         none = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12, off_cluster_tries=0)
@@ -268,7 +268,7 @@ def test_a_target_where_nothing_converges_within_its_restarts_is_moved_off(monke
     monkeypatch.setattr(fl, "complex_shift_solve", nothing_first)
     scene = lattice(32, (8, 8), 2.0)
     with pencil(scene) as pen:
-        tau = complex(fl.proxy_targets(scene, ["slip+"] * 32, 1)[0])
+        tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
         got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
     assert got.flutter is True and got.counts["moved"] == 1 and "restarts" in got.evidence
     assert caps == [fl.SEARCH_RESTARTS, fl.LAST_RESTARTS]
@@ -340,7 +340,7 @@ def test_large_pencils_start_above_the_cluster(monkeypatch):
         assert pen.maps.retained.size >= 50
         got = fl.pencil_flutter(pen, scene, dense_max=0)
         ref = fl.pencil_flutter(pen, scene)
-    tau = complex(fl.proxy_targets(scene, ["slip+"] * 16, 1)[0])
+        tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
     (targets, kw), = seen
     assert targets == [fl.off_cluster(tau, 0)]
     assert kw["ncv"] == fl.OFF_CLUSTER_NCV and kw["low_rank"] == fl.LOW_RANK_TOL
@@ -503,7 +503,7 @@ def test_interface_proxy_targets_give_certified_modes_and_only_a_lower_bound():
     scene = _interface_scene(48, (5, 5), 1.0)
     with pencil(scene) as pen:
         ref = fl.pencil_flutter(pen, scene)
-        targets = fl.proxy_targets(scene, None, 3, lines=pen.lines)
+        targets = fl.proxy_targets(scene, pen.lines, 3)
         got = fl.pencil_flutter(pen, scene, dense_max=0)
     assert ref.complete and len(targets) == 3 and "contact-strip proxy" in got.evidence
     assert got.flutter is True and got.modes
@@ -540,7 +540,7 @@ def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monke
     with pencil(scene) as pen:
         got = fl.pencil_flutter(pen, scene, dense_max=0)
         ref = fl.pencil_flutter(pen, scene)
-        tau = complex(fl.proxy_targets(scene, None, 1, lines=pen.lines)[0])
+        tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
     (targets, kw), = seen
     assert targets == [tau] and kw["nev"] == 1 and kw["ncv"] == fl.INTERFACE_NCV
     assert "searched at its σ for one eigenpair" in got.evidence

@@ -352,6 +352,17 @@ def combine_branches(flags) -> bool | None:
     return None
 
 
+def _take_rows(layers, budget: int) -> list:
+    """The layers met in order, each cut to the rows left of ``budget``, until it is spent."""
+    kept, left = [], budget
+    for layer in layers:
+        if left <= 0:
+            break
+        kept.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
+        left -= kept[-1].rows
+    return kept
+
+
 def strip_proxy(scene, base_states):
     """The contact-strip proxy: the bottom :data:`PROXY_ROWS` rows (the cut held fixed) and
     :data:`PROXY_NX` columns from the middle of the base, with the base's resolved states.
@@ -359,12 +370,7 @@ def strip_proxy(scene, base_states):
     if scene.contact is None or scene.embedded or any(i.kind == "frictional" for i in scene.interfaces):
         return None
     nx = min(scene.nx, PROXY_NX)
-    left, kept = PROXY_ROWS, []
-    for layer in scene.layers:
-        if left <= 0:
-            break
-        kept.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
-        left -= kept[-1].rows
+    kept = _take_rows(scene.layers, PROXY_ROWS)
     cut = sum(layer.rows for layer in kept) < scene.ny
     start = (len(base_states) - nx) // 2
     return dataclasses.replace(
@@ -392,19 +398,8 @@ def interface_proxy(scene, line):
     if scene.contact is not None or scene.embedded:
         return None
     index = next(i.index for i in scene.interfaces if i.kind == "frictional" and i.below == line.name)
-    half = PROXY_ROWS // 2
-    below, left = [], half
-    for layer in reversed(scene.layers[:index + 1]):
-        if left <= 0:
-            break
-        below.insert(0, dataclasses.replace(layer, rows=min(layer.rows, left)))
-        left -= below[0].rows
-    above, left = [], half
-    for layer in scene.layers[index + 1:]:
-        if left <= 0:
-            break
-        above.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
-        left -= above[-1].rows
+    below = _take_rows(reversed(scene.layers[:index + 1]), PROXY_ROWS // 2)[::-1]
+    above = _take_rows(scene.layers[index + 1:], PROXY_ROWS // 2)
     first = index + 1 - len(below)  # the scene's index of the proxy's first layer
     kept = tuple(below + above)
     interfaces = tuple(dataclasses.replace(i, index=i.index - first) for i in scene.interfaces
@@ -415,8 +410,7 @@ def interface_proxy(scene, line):
     start = sliding_window(line.states, nx)
     states = tuple(state_names(line.states[start:start + nx]))
     interfaces = tuple(dataclasses.replace(i, states=states) if i.index == index - first else i for i in interfaces)
-    rows_below = sum(layer.rows for layer in below)
-    cut_below = rows_below < sum(layer.rows for layer in scene.layers[:index + 1])
+    cut_below = sum(layer.rows for layer in below) < sum(layer.rows for layer in scene.layers[:index + 1])
     cut_above = sum(layer.rows for layer in above) < sum(layer.rows for layer in scene.layers[index + 1:])
     boundary = dataclasses.replace(scene.boundary, bottom="fixed" if cut_below else scene.boundary.bottom,
                                    top="fixed" if cut_above else scene.boundary.top)
@@ -442,15 +436,11 @@ def _proxy_of(scene, lines):
     return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
 
 
-def proxy_targets(scene, base_states, count: int = SEARCH_TARGETS, *, lines=None) -> list[complex]:
+def proxy_targets(scene, lines, count: int = SEARCH_TARGETS) -> list[complex]:
     """Up to ``count`` targets: σ of the proxy's fastest contact-localised flutter modes, at
     least 0.1|σ| apart (all its modes when none is localised); [] without a proxy.  ``lines``:
-    the scene's resolved contact lines (then ``base_states`` is ignored), for the proxy of a
-    frictional interface."""
-    if lines is None:
-        proxy, near = strip_proxy(scene, base_states), np.arange(PROXY_NEAR_ROWS)
-    else:
-        proxy, near = _proxy_of(scene, lines)
+    the scene's contact lines with their states resolved (a pencil's ``lines``)."""
+    proxy, near = _proxy_of(scene, lines)
     if proxy is None:
         return []
     with pencil(proxy) as pen:  # a lattice of its own, PROXY_NX × PROXY_ROWS, serial
@@ -499,7 +489,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     why = ""
     if targets is None:
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
-        targets = proxy_targets(scene, None, count, lines=pen.lines)
+        targets = proxy_targets(scene, pen.lines, count)
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
         interface = not any(line.name == BASE for line in pen.lines)
         if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM and interface:

@@ -157,23 +157,21 @@ def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
                                cntl={7: SCHUR_LOW_RANK, **cntl})
 
 
-def schur_factor(comm, H: sp.spmatrix, rows: np.ndarray, *, prefix: str, what: str,
-                 low_rank: float | None = None) -> "mumps_c.SchurSeries":
+def schur_factor(comm, H: sp.spmatrix, rows: np.ndarray, *, prefix: str, what: str) -> "mumps_c.SchurSeries":
     """One DMUMPS LDLᵀ factorisation of the symmetric ``H`` (SciPy, every rank holds it) with
     the dense Schur complement onto ``rows``: the returned, factored
     :class:`~meicp.petsc.mumps_c.SchurSeries` gives it (``schur_complement()``, every rank) and
     solves with the interior block (``solve(rhs)``, on rank 0) — one factor for both, where
     PETSc's ``MatSolve`` on a factor with a Schur set solves the Schur-expanded system instead.
-    Controls: ``-<prefix>mat_mumps_icntl_<k>`` / ``cntl_<k>``; ``low_rank``: block low-rank at
-    that threshold (ICNTL(35) = 2, CNTL(7)), None: full rank.  A :class:`MumpsError` (a
+    Controls: ``-<prefix>mat_mumps_icntl_<k>`` / ``cntl_<k>`` (full rank unless they say
+    otherwise).  A :class:`MumpsError` (a
     ProblemError) when no usable DMUMPS loads or MUMPS fails.  Collective; call ``destroy()``."""
     entry, why = mumps_c.load("d")
     if entry is None:
         raise mumps_c.MumpsError(why)
     icntl, cntl = mumps_controls(prefix + "mat_mumps_")
-    defaults, base_cntl = ({35: 2}, {7: low_rank}) if low_rank is not None else ({}, {})
-    series = mumps_c.SchurSeries(mpi_comm(comm), H, None, rows, defaults=defaults, icntl=icntl,
-                                 cntl={**base_cntl, **cntl}, what=what, option=f"-{prefix}mat_mumps_")
+    series = mumps_c.SchurSeries(mpi_comm(comm), H, None, rows, icntl=icntl, cntl=cntl, what=what,
+                                 option=f"-{prefix}mat_mumps_")
     try:
         series.factor(0.0)
     except Exception:
