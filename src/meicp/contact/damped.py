@@ -13,7 +13,7 @@ With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``),
 - **Flutter** of steady sliding: every eigenvalue of the quadratic sliding pencil by the
   dense companion linearisation (:func:`meicp.eicp.quadratic.quadratic_spectrum`), each with
   its rounding radius r: a mode with Re λ > r, |Im λ| > r and a backward error below
-  :data:`~meicp.contact.flutter.RESIDUAL_TOL` is certified flutter; an eigenvalue with
+  :data:`~meicp.contact.flutter_verdict.RESIDUAL_TOL` is certified flutter; an eigenvalue with
   Re λ < −r decays and one within r of the real axis whose disk meets no other's is real;
   anything else is borderline (undecided).
 
@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core import limits
-from ..core.comm import comm_size, mpi_comm
+from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from ..core.matrix import to_dense
 from ..eicp.quadratic import QuadraticSpectrum, quadratic_spectrum, solve_quadratic_eicp
@@ -41,10 +41,9 @@ from .divergence.enumeration import check_enumeration_size, enumeration_is_small
 from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_growth import FlutterGrowth
-from .flutter_verdict import FlutterCandidate, PencilFlutter, RejectedPair
+from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
+from .on_root import on_root
 
-#: a damped flutter mode's backward error must be at most this (as the undamped path's)
-RESIDUAL_TOL = 1e-10
 
 
 @dataclass(frozen=True)
@@ -96,15 +95,6 @@ def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return to_dense(pen.A), to_dense(pen.B), damping_matrix(pen).toarray()
 
 
-def _on_root(comm, compute):
-    """``compute()`` on rank 0, broadcast (the dense paths are serial; ``compute`` must not be
-    collective)."""
-    comm = mpi_comm(comm)
-    if comm is None or comm_size(comm) == 1:
-        return compute()
-    return comm.bcast(compute() if comm.Get_rank() == 0 else None, root=0)
-
-
 # -- divergence ----------------------------------------------------------------------------------
 
 
@@ -127,7 +117,7 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
     max_j = options.get("max_j") if method == "enumerate" else None
 
     A, B, D = _dense(pen)  # collective when the pencil is distributed
-    res = _on_root(comm, lambda: solve_quadratic_eicp(A, B, D, red.J, lam_min=0.0, tol=tol, max_j=max_j))
+    res = on_root(mpi_comm(comm), lambda: solve_quadratic_eicp(A, B, D, red.J, lam_min=0.0, tol=tol, max_j=max_j))
     found = [mode_of(SimpleNamespace(lam=s.sigma, x=s.x, support=s.support, residual=s.residual), red)
              for s in res.solutions]
     listed = [m for m in found if lam_min == 0 or m.sigma >= lam_min]
@@ -163,7 +153,7 @@ def damped_flutter(pen, comm=None, *, dense_max: int | None = None) -> PencilFlu
                            "(limits.FLUTTER_DENSE_MAX, or flutter_dense_max): the damped flutter search at scale "
                            "(SLEPc PEP) is not supported yet (docs/damping.md)")
     A, B, D = _dense(pen)  # collective when the pencil is distributed
-    return _on_root(comm, lambda: classify_spectrum(quadratic_spectrum(A, B, D)))
+    return on_root(mpi_comm(comm), lambda: classify_spectrum(quadratic_spectrum(A, B, D)))
 
 
 def classify_spectrum(spec: QuadraticSpectrum, residual_tol: float = RESIDUAL_TOL) -> PencilFlutter:

@@ -38,22 +38,21 @@ import scipy.linalg as sl
 import scipy.sparse as sp
 
 from ..core import limits
-from ..core.comm import available_memory_on, comm_size, mpi_comm
+from ..core.comm import available_memory_on, mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
 from .damped import damped_flutter
 from .flutter_growth import FlutterGrowth, combine_growths, dense_growth, search_growth
-from .flutter_verdict import FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
+from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState, state_names
+from .on_root import on_root
 from .problem import pencil, pencil_of
 from .result import FlutterMode, growth_frequency
 
 log = logging.getLogger("meicp")
 
-#: a flutter mode's backward error must be at most this to be reported
-RESIDUAL_TOL = 1e-10
 #: large-scale path: |Im σ| must exceed MARGIN·η·(‖A‖₁/‖B‖₁ + |σ|) (η the backward error)
 #: to count as non-real; MARGIN stands for the unknown condition number (κ ≤ 1.1e3 measured
 #: on the dense cases)
@@ -476,9 +475,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
         return damped_flutter(pen, comm, dense_max=dense_max)
     if n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max):
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
-        if comm is None or comm_size(comm) == 1:
-            return dense_flutter(A, B)
-        return comm.bcast(dense_flutter(A, B) if comm.Get_rank() == 0 else None, root=0)
+        return on_root(comm, lambda: dense_flutter(A, B))
     need = limits.FLUTTER_SEARCH_BYTES_PER_DOF * n
     memory, where = available_memory_on(comm, need)
     if memory is not None and need > memory:

@@ -9,6 +9,10 @@ import numpy as np
 
 from .flutter_growth import FlutterGrowth
 
+#: a flutter mode's backward error must be at most this to be reported (the undamped and the
+#: damped paths alike)
+RESIDUAL_TOL = 1e-10
+
 
 @dataclass(frozen=True)
 class FlutterCandidate:

@@ -76,7 +76,7 @@ class FlutterMode:
     x: the complex mode shape in natural DOF numbering (length 2·nx·ny, ‖x‖₂ = 1, largest
     entry real positive; fixed and sticking DOFs 0).  residual: backward error
     ‖Ax − σBx‖ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖) on the retained DOFs (a mode above
-    :data:`meicp.contact.flutter.RESIDUAL_TOL` is never reported).  support: the base's
+    :data:`meicp.contact.flutter_verdict.RESIDUAL_TOL` is never reported).  support: the base's
     sliding contact nodes of the pencil (columns, left to right); interface_support the same
     per frictional interface.  radius: how far rounding may move σ (dense path: the
     first-order bound n·u·(‖A‖ + |σ|‖B‖)·κ; large-scale path: the margin used instead of
