@@ -9,6 +9,7 @@ enumeration, and what a verdict costs against one SLEPc eigen-solve of the same 
     flock /work/scratch/bench.lock mpirun -n 2 .venv/bin/python scripts/bench_verdicts.py cost \\
         --nx 1000 --rows 250 250 --mu 3 1 --shear 0.5 0           # -> verdicts_cost.csv
     .venv/bin/python scripts/bench_verdicts.py chart
+    .venv/bin/python scripts/bench_verdicts.py first      # -> verdicts_first_search.csv
 
 Scenes: ``two_layer_scene`` (k = 1 / 5, ρ = 1 / 2, top fixed, sides free), every base node
 in one slip state, |J| = nx sliding contacts; flutter is not part of these timings
@@ -34,6 +35,8 @@ FAMILY = ["nx", "rows", "dofs", "J", "state", "shear", "mu", "divergence", "test
 CHECK = ["nx", "rows", "J", "state", "shear", "mu", "truth", "window", "agree", "test"]
 COST = ["nx", "rows", "dofs", "J", "ranks", "state", "shear", "mu", "divergence", "test", "sigma", "analyze_s",
         "eigensolve_s", "ratio", "load1"]
+FIRST = ["family", "nx", "rows", "contrast", "state", "shear", "mu", "theta_positive", "theta", "first_search",
+         "first_found", "divergence", "test"]
 MUS = np.geomspace(0.05, 6.0, 8)
 
 
@@ -154,6 +157,48 @@ def chart(args):
     fig.savefig(csv_path("verdicts_family").with_suffix(".png"), dpi=120)
 
 
+def first(args):
+    """What the first search finds where the short Lanczos run shows no Ritz value above 0
+    (docs/benchmarks-notes.md, "first search only above 0"): for every scene whose Rayleigh
+    bound at 0 fails, the first search is made whatever θ (the driver makes it only for a
+    positive θ) and the verdict of ``analyze`` is recorded beside it; two-layer family and the
+    frictional-interface family (bench_interfaces.py's scenes)."""
+    from meicp.contact.divergence import search, sigma_window, steps
+
+    scenes = []
+    for size in args.sizes:
+        nx, lr = int(size.split(":")[0]), tuple(int(v) for v in size.split(":")[1].split("+"))
+        for state in ("slip+", "slip-"):
+            for shear in (0.5, -0.5):
+                for mu in np.geomspace(0.05, 6.0, 6):
+                    scenes.append(({"family": "two-layer", "contrast": "1/5", "shear": shear}, nx, lr, state, mu,
+                                   two_layer_scene(nx, lr, mu=float(mu), states=state, shear=shear)))
+    for size in args.interface_sizes:
+        nx, lr = int(size.split(":")[0]), tuple(int(v) for v in size.split(":")[1].split("+"))
+        for contrast, stiffness in (("6/1", (6.0, 1.0)), ("2/1", (2.0, 1.0))):
+            for state in ("slip+", "slip-"):
+                for mu in np.geomspace(0.05, 20.0, 6):
+                    scene = two_layer_scene(nx, lr, bottom="fixed", top="fixed", sides="free", stiffness=stiffness,
+                                            density=(1.0, 1.0), interface={"kind": "frictional", "friction": float(mu),
+                                                                           "states": state})
+                    scenes.append(({"family": "interface", "contrast": contrast, "shear": 0}, nx, lr, state, mu, scene))
+    rows = []
+    for fixed, nx, lr, state, mu, scene in scenes:
+        row = {**fixed, "nx": nx, "rows": f"{lr[0]}+{lr[1]}", "state": state, "mu": f"{mu:.4g}", "first_search": False}
+        with pencil(scene) as pen:
+            started = time.perf_counter()
+            top = sigma_window.probe_top(pen.A, pen.B)
+            row.update(theta_positive=top.positive, theta=f"{top.theta:.6g}")
+            if steps.bound_at_zero(pen.A, pen.B, top, started)[0] is None:
+                settings = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, top.shift, started)
+                row.update(first_search=True, first_found=search.first_search(settings).found)
+        r = meicp.analyze(scene, flutter=False)
+        row.update(divergence=r.divergence, test=r.proofs[0].test if r.proofs else "")
+        rows.append(row)
+        print(row, flush=True)
+    write_rows(csv_path("verdicts_first_search"), rows, FIRST)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
@@ -172,6 +217,9 @@ def main():
     k.add_argument("--shear", type=float, nargs="+", default=[0.5, 0.0],
                    help="reference shears, each run beside the others (0: the shipped scenes' lattice)")
     sub.add_parser("chart")
+    w = sub.add_parser("first")
+    w.add_argument("--sizes", nargs="+", default=["400:10+10", "1000:25+25"], help="two-layer lattices nx:lower+upper")
+    w.add_argument("--interface-sizes", nargs="+", default=["300:10+10"], help="interface lattices nx:lower+upper")
     args = p.parse_args()
     globals()[args.what](args)
 

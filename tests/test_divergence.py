@@ -125,6 +125,24 @@ def test_without_a_certified_window_the_condensed_proof_covers_every_sigma():
     assert v.stable is not True
 
 
+def test_below_a_positive_top_the_proof_comes_before_any_search(monkeypatch):
+    """With no Ritz value above 0 in the short Lanczos run the first search would start in the
+    cluster of slow vibrations and give up: it is not made.  The condensed proof decides a
+    stable lattice with no eigen-solve; on an unstable one the whole search after the proof
+    still runs (here, from the faked top, it misses the mode: undecided, never stable)."""
+    from meicp.contact.divergence import driver
+
+    def no_first_search(settings):
+        raise AssertionError("the first search was made below a positive top")
+
+    monkeypatch.setattr(driver, "first_search", no_first_search)
+    v = _verdict(_scene(60, (2, 2), "slip-", 1.2), estimate_top=_stalled)
+    assert v.stable is True and v.proof.test == "condensed-windows"
+    assert v.proof.eigen_solves == 0 and v.proof.supports_visited == 0 and v.eicp is None
+    v = _verdict(_scene(60, (2, 2), "slip-", 3.0), estimate_top=_stalled)
+    assert v.stable is None and v.proof.eigen_solves >= 1 and v.eicp is not None
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(nx=st.integers(4, 9), lower=st.integers(1, 3), upper=st.integers(1, 3),
        state=st.sampled_from(["slip+", "slip-"]), shear=st.sampled_from([-0.5, 0.5]),

@@ -34,6 +34,10 @@ ROUNDING = 16.0
 #: MUMPS settings under which PETSc asks it for the inertia: ICNTL(13) = 1 (no ScaLAPACK
 #: root) and ICNTL(24) = 1 (null pivot detection), required in parallel
 INERTIA_OPTIONS = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
+#: the ordering, as every other factorisation here: AMF (ICNTL(7) = 2; no METIS in Debian's
+#: MUMPS): the Rayleigh bound at 0 of extensive_interface.toml (10⁶ DOFs, 2 ranks) 5.4 s against
+#: 7.3 s with MUMPS' automatic choice (PORD) (docs/benchmarks-notes.md, "inertia ordering")
+ORDERING = {"mat_mumps_icntl_7": 2}
 
 
 def inertia(A) -> tuple[int, int, int]:
@@ -43,7 +47,7 @@ def inertia(A) -> tuple[int, int, int]:
     try:
         ksp.setOperators(A)
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
-                    "pc_factor_mat_solver_type": "mumps", **INERTIA_OPTIONS}
+                    "pc_factor_mat_solver_type": "mumps", **ORDERING, **INERTIA_OPTIONS}
         with OptionsScope(PREFIX, defaults) as scope:
             scope.configure(ksp)
             require_mumps_factor(ksp, PREFIX, ("cholesky",), "the inertia proof")

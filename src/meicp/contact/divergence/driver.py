@@ -6,7 +6,10 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
 
 1. **Rayleigh bound at 0** (one LDLᵀ), unless a short Lanczos run on (sym A, sym B), made
    first (:func:`.sigma_window.probe_top`), has a Ritz value θ > 0.
-2. **First search** from the window's top θ: a short active-set search (:mod:`.search`).
+2. **First search** from the window's top θ: a short active-set search (:mod:`.search`),
+   only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
+   slow vibrations and gives up after one restart (docs/benchmarks-notes.md, "first search
+   only above 0"), so the proof comes first and the whole search after it.
 3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).
 4. **σ-window**, only where that proof stopped at some σ = c: a certified σ_max
    (:mod:`.sigma_window`); ``σ_max ≤ c`` completes the proof, else the search goes on from σ_max.
@@ -33,7 +36,7 @@ from ..problem import Pencil
 from . import steps
 from .condensed import prove_no_divergence
 from .enumeration import enumeration_is_small, named_method_verdict
-from .search import first_search, search_settings, searches_below, whole_search, widened_search
+from .search import Tally, first_search, search_settings, searches_below, whole_search, widened_search
 from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate
 from .verdict import DivergenceVerdict
 
@@ -81,8 +84,8 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         return verdict
     reasons = [why]
     settings = search_settings(pen, scene, comm, lam_min, tol, options, top.shift, started)
-    first = first_search(settings)
-    if first.found:
+    first = first_search(settings) if top.positive else None
+    if first is not None and first.found:
         return steps.mode_found(first, None)
     condensed = steps.condensed_proof(pen, comm, tol, procedures.prove, started)
     if condensed.proved:
@@ -99,8 +102,8 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     reasons.append(f"condensed test: {condensed.statement}")
     window = tuple(float(v) for v in condensed.window) if condensed.window else None
     last = first
-    if settings.whole_search_left:
-        last = whole_search(settings, first.tally)
+    if first is None or settings.whole_search_left:
+        last = whole_search(settings, Tally() if first is None else first.tally)
         if last.found:
             return steps.mode_found(last, window)
     lower = []

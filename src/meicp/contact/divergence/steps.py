@@ -61,10 +61,15 @@ def condensed_proof(pen, comm, tol: float, prove, started: float):
     return condensed
 
 
-def proved_by_condensation(condensed, first: SearchOutcome) -> DivergenceVerdict:
-    """3. The condensed proof holds on [0, ∞): no divergence."""
+def _eicp(outcome: SearchOutcome | None):
+    return None if outcome is None else outcome.eicp
+
+
+def proved_by_condensation(condensed, first: SearchOutcome | None) -> DivergenceVerdict:
+    """3. The condensed proof holds on [0, ∞): no divergence (``first``: the first search,
+    None when it was not made)."""
     text = f"{condensed.statement} (a proof)"
-    return DivergenceVerdict([], True, text, first.eicp, _window_proof(
+    return DivergenceVerdict([], True, text, _eicp(first), _window_proof(
         condensed.test, text, (0.0, math.inf), first, margin=condensed.margin))
 
 
@@ -73,12 +78,12 @@ def covered_by_condensation(condensed) -> float:
     return condensed.window[1] if condensed.window else -math.inf
 
 
-def completed_by_sigma_max(condensed, sigma_max: float, first: SearchOutcome) -> DivergenceVerdict:
+def completed_by_sigma_max(condensed, sigma_max: float, first: SearchOutcome | None) -> DivergenceVerdict:
     """4. No solution above σ_max (Rayleigh bound) and none in [0, c ≥ σ_max] (condensed)."""
     covered = covered_by_condensation(condensed)
     text = (f"no solution above σ_max = {sigma_max:.6g} (Rayleigh bound, LDLᵀ inertia) and none in "
             f"[0, {covered:.6g}] by the condensed windows ({condensed.statement}) (a proof)")
-    return DivergenceVerdict([], True, text, first.eicp, _window_proof(
+    return DivergenceVerdict([], True, text, _eicp(first), _window_proof(
         "rayleigh-window+condensed-windows", text, (0.0, sigma_max), first, margin=condensed.margin))
 
 
