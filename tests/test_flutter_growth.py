@@ -15,8 +15,10 @@ from hypothesis import strategies as st
 
 import meicp
 from meicp.contact import flutter as fl
-from meicp.contact.flutter_growth import EXACT_WIDTH, FlutterGrowth, combine_growths, disk_growth_range
+from meicp.contact.flutter_growth import (EXACT_WIDTH, FlutterGrowth, combine_growths, disk_growth_range,
+                                         rectangle_growth)
 from meicp.contact.problem import pencil
+from meicp.examples import two_layer_scene
 
 from .conftest import ROOT
 from .test_flutter import lattice
@@ -73,9 +75,36 @@ def test_search_bracket_never_claims_the_fastest():
     with pencil(scene) as pen:
         got = fl.pencil_flutter(pen, scene, dense_max=0)
         ref = fl.pencil_flutter(pen, scene)
-    assert got.flutter is True and got.growth.upper is None and not got.growth.exact
-    assert 0 < got.growth.lower <= ref.growth.upper
-    assert "not proved the fastest" in got.growth.describe()
+    assert got.flutter is True and not got.growth.exact
+    assert 0 < got.growth.lower <= ref.growth.upper <= got.growth.upper < math.inf
+    assert "not proved the fastest" in got.growth.describe() and "Bendixson's rectangle" in got.growth.evidence
+
+
+@pytest.mark.parametrize("real_max, imag_max", [(0.0, 1.7), (-0.5, 0.1), (2.0, 0.0), (-3.0, 0.0), (1e-3, 40.0)])
+def test_the_rectangle_bound_is_its_corner(real_max, imag_max):
+    """No σ with Re σ ≤ real_max, |Im σ| ≤ imag_max grows faster than the corner (sampled
+    densely over the rectangle's boundary and inside), and the corner itself is attained."""
+    x = np.linspace(real_max - 5.0, real_max, 201)
+    y = np.linspace(-imag_max, imag_max, 201)
+    z = x[:, None] + 1j * y[None, :]
+    worst = np.sqrt(z).real.max()
+    bound = rectangle_growth(real_max, imag_max)
+    assert worst <= bound and bound <= np.sqrt(complex(real_max, imag_max)).real * (1 + 1e-14)
+    assert rectangle_growth(math.inf, 1.0) == math.inf
+
+
+@settings(max_examples=15, deadline=None)
+@given(nx=st.integers(6, 24), rows=st.integers(2, 4), mu=st.floats(0.05, 6.0), state=st.sampled_from(["slip+", "slip-"]))
+def test_the_search_bracket_holds_qz_fastest(nx, rows, mu, state):
+    """On random base-contact lattices the search's bracket (a certified mode below,
+    Bendixson's rectangle above — Gershgorin's Re σ bound, or the divergence verdict's
+    Rayleigh bound) contains the fastest growth of every eigenvalue QZ finds."""
+    scene = two_layer_scene(nx, (rows, rows), mu=mu, states=state, shear=0.5)
+    searched, dense = meicp.analyze(scene, flutter_dense_max=0), meicp.analyze(scene)
+    growth = searched.flutter_growth
+    fastest = qz_growths(scene).max(initial=0.0)
+    assert growth.upper is not None and growth.lower <= dense.flutter_growth.upper * (1 + 1e-9)
+    assert fastest <= growth.upper and dense.flutter_growth.lower <= growth.upper
 
 
 def test_branches_combine_to_the_widest_bracket():
@@ -111,7 +140,10 @@ def test_search_result_rows_say_fastest_found(monkeypatch):
     assert r.flutter is True and not r.flutter_growth.exact
     assert "not proved the fastest" in rows["flutter growth"]
     assert "fastest found first, not proved the fastest" in rows["flutter modes"]
-    assert r.to_dict()["flutter_growth"]["upper"] is None and r.to_dict()["flutter_growth"]["upper_infinite"] == 1
+    # the upper end is Bendixson's rectangle: finite, loose, and written as a number
+    assert "proved ≤" in rows["flutter growth"]
+    assert r.to_dict()["flutter_growth"]["upper"] == r.flutter_growth.upper < math.inf
+    assert "upper_infinite" not in r.to_dict()["flutter_growth"]
 
 
 def test_flutter_dense_max_buys_the_exact_bracket(monkeypatch, cli):

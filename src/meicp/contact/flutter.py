@@ -246,17 +246,28 @@ def off_cluster(tau: complex, attempt: int) -> complex:
     return tau + 1j * OFF_CLUSTER * max(tau.imag, 0.05 * abs(tau)) * 2 ** attempt
 
 
+def _real_part_bound(ops: SlidingPencilOps, given: tuple | None) -> tuple[float | None, str]:
+    """``(γ, how)``: Re σ ≤ γ for every eigenvalue of a pencil with a diagonal B — the
+    caller's certified bound or Gershgorin's on the scaled symmetric part, the smaller."""
+    gershgorin = (ops.real_part_bound(), "Gershgorin's discs of D^-1/2 sym(A) D^-1/2")
+    return gershgorin if given is None or given[0] >= gershgorin[0] else given
+
+
 def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int | None = SEARCH_NCV,
                    tol: float = 1e-12, residual_tol: float = RESIDUAL_TOL, options: dict | None = None,
                    why_targets: str = "", off_cluster_tries: int = OFF_CLUSTER_TRIES,
-                   low_rank: float | None = None, strict_tol: float | None = None) -> PencilFlutter:
+                   low_rank: float | None = None, strict_tol: float | None = None,
+                   real_bound: tuple | None = None) -> PencilFlutter:
     """Flutter modes of (A, B) (PETSc Mats, or SciPy distributed here over ``comm``) near the
     complex ``targets``: True with certified modes, else None — never a proof of absence.
     A target whose converged pairs all fail the residual gate is retried off the cluster
     (:func:`off_cluster`), at most ``off_cluster_tries`` times.  ``low_rank``: the MUMPS
     block-low-rank tolerance of the factor (None: full rank).  ``tol``: SLEPc's; with
     ``strict_tol``, a solve none of whose pairs passes the residual gate is made again at
-    ``strict_tol`` before the target counts as failed.  Collective."""
+    ``strict_tol`` before the target counts as failed.  ``real_bound``: ``(γ, how)``, a
+    certified Re σ < γ for every eigenvalue known to the caller (the divergence verdict's
+    Rayleigh bound), used when it is below Gershgorin's; with the skew-part bound it bounds
+    the growth from above (:func:`~.flutter_growth.search_growth`).  Collective."""
     own = not is_petsc_mat(A)
     if own:
         comm = mpi_comm(comm)
@@ -267,6 +278,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                 return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
                                                      "a proof", growth=NO_FLUTTER)
             bound = ops.skew_bound()
+            real_max, real_how = _real_part_bound(ops, real_bound) if bound is not None else (None, "")
             modes, rejected, disks, borderline, moved = [], [], [], 0, []
             for tau in targets:
                 tau = complex(tau)
@@ -316,7 +328,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                      "is not (not a proof of the growth rate)")
     else:
         evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
-    growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets")
+    rectangle = None if bound is None or real_max is None else (real_max, bound, real_how)
+    growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets", rectangle)
     return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,
                          growth=growth)
 

@@ -109,12 +109,30 @@ def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, mode
     return FlutterGrowth(float(lower), float(upper), text)
 
 
-def search_growth(modes: list, why_no_bound: str) -> FlutterGrowth:
+def rectangle_growth(real_max: float, imag_max: float) -> float:
+    """The largest Re √σ over the rectangle ``Re σ ≤ real_max``, ``|Im σ| ≤ imag_max``:
+    Re √σ = sqrt((|σ| + Re σ)/2) grows with Re σ and with |Im σ|, so it is taken at the
+    corner (inf when a side is not finite)."""
+    if not (math.isfinite(real_max) and math.isfinite(imag_max)):
+        return math.inf
+    x, y = float(real_max), abs(float(imag_max))
+    return math.sqrt(max(0.0, 0.5 * (math.hypot(x, y) + x))) * (1 + _SLACK)
+
+
+def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None) -> FlutterGrowth:
     """The bracket of a search that computed part of the spectrum: the fastest certified
-    mode below, no upper bound."""
+    mode below; above, when ``rectangle`` = ``(real_max, imag_max, how)`` bounds every
+    eigenvalue (Bendixson: a certified Re σ ≤ real_max and |Im σ| ≤ imag_max), the growth at
+    its corner (:func:`rectangle_growth`), a proof however loose; else no upper bound."""
     lower = _certified_lower(modes)
-    return FlutterGrowth(float(lower), None, f"the fastest certified mode found grows at least {lower:.6g}; "
-                                      f"no upper bound: {why_no_bound}")
+    text = f"the fastest certified mode found grows at least {lower:.6g}; "
+    if rectangle is None or not math.isfinite(rectangle_growth(*rectangle[:2])):
+        return FlutterGrowth(float(lower), None, text + f"no upper bound: {why_no_bound}")
+    real_max, imag_max, how = rectangle
+    upper = max(rectangle_growth(real_max, imag_max), lower)
+    return FlutterGrowth(float(lower), float(upper), text + (
+        f"every eigenvalue has Re σ ≤ {real_max:.6g} ({how}) and |Im σ| ≤ {imag_max:.6g} (skew-part bound), "
+        f"so none grows faster than {upper:.6g} (Bendixson's rectangle, a proof; {why_no_bound})"))
 
 
 def _certified_lower(modes: list) -> float:

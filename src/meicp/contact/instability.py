@@ -156,7 +156,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
                     with stage("flutter"):
                         sliding = analyze_flutter(lattice, lines, scene, pencil=pen, static=static, **dense,
-                                                  options=dict(scene.petsc))
+                                                  options=dict(scene.petsc), real_bound=verdict.real_part_bound())
             verdicts.append(verdict)
         if flutter and sliding is None:  # grazing branches (or nothing retained): their own pencils
             with stage("flutter"):

@@ -90,6 +90,7 @@ class SlidingPencilOps:
         self.A_local, self.B_local = local_csr(A), local_csr(B)
         self._work = [A.createVecRight(), A.createVecRight(), A.createVecLeft(), A.createVecLeft(),
                       A.createVecLeft()]
+        self._parts = False  # not made yet (:meth:`_scaled_parts`)
 
     def __enter__(self) -> "SlidingPencilOps":
         return self
@@ -100,7 +101,7 @@ class SlidingPencilOps:
     def destroy(self) -> None:
         for v in self._work:
             v.destroy()
-        self._work = []
+        self._work, self._parts = [], False
 
     def residual(self, sigma: complex, x_local: np.ndarray) -> float:
         """Backward error ‖Ax − σBx‖ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖) of (σ, x), x given by this
@@ -136,28 +137,59 @@ class SlidingPencilOps:
             return False
         return bool(self.A.isSymmetric(0.0))
 
+    def _scaled_parts(self):
+        """``(lo, scale, AT_local)`` when B = D is diagonal positive (else None): this rank's
+        first row, D^{-1/2} whole, and this rank's rows of Aᵀ — made once for both bounds.
+        SciPy on the local rows: PETSc's A ± Aᵀ (MatAYPX, different patterns) is slower
+        (docs/benchmarks-notes.md).  Collective."""
+        if self._parts is False:
+            PETSc = import_petsc()
+            d = diagonal_of(self.B, self.B_local)
+            self._parts = None
+            if d is not None:
+                comm = mpi_comm(self.A.getComm())
+                scale = 1.0 / np.sqrt(d if comm is None else np.concatenate(comm.allgather(d)))
+                AT = self.A.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() works in place
+                try:
+                    self._parts = (self.A.getOwnershipRange()[0], scale, local_csr(AT))
+                finally:
+                    AT.destroy()
+        return self._parts
+
+    def _scaled(self, sign: float) -> tuple[int, sp.csr_matrix] | None:
+        """``(lo, this rank's rows of D^{-1/2}·(A + sign·Aᵀ)/2·D^{-1/2})``, or None."""
+        parts = self._scaled_parts()
+        if parts is None:
+            return None
+        lo, scale, AT_local = parts
+        rows = scale[lo:lo + self.A_local.shape[0]]
+        return lo, (sp.diags(rows) @ (0.5 * (self.A_local + sign * AT_local)) @ sp.diags(scale)).tocsr()
+
     def skew_bound(self) -> float | None:
         """β ≥ |Im σ| for every eigenvalue when B = D is diagonal positive: Im σ =
         Im(yᴴW y)/(yᴴy) with y = D^{1/2}x and W = D^{-1/2}·skew(A)·D^{-1/2}, so |Im σ| ≤
         ‖W‖₂ ≤ ‖W‖₁ (one pass over the rows).  None when B is not diagonal.  Collective."""
-        PETSc = import_petsc()
-        d = diagonal_of(self.B, self.B_local)
-        if d is None:
+        scaled = self._scaled(-1.0)
+        if scaled is None:
             return None
-        comm = mpi_comm(self.A.getComm())
-        scale = 1.0 / np.sqrt(d)
-        scale_all = scale if comm is None else np.concatenate(comm.allgather(scale))
-        lo, hi = self.A.getOwnershipRange()
-        # SciPy on the local rows: PETSc's A − Aᵀ (MatAYPX, different patterns) is slower
-        # (docs/benchmarks-notes.md)
-        AT = self.A.transpose(PETSc.Mat())  # a new matrix: petsc4py's transpose() works in place
-        try:
-            AT_local = local_csr(AT)
-        finally:
-            AT.destroy()
-        W = sp.diags(scale_all[lo:hi]) @ (0.5 * (self.A_local - AT_local)) @ sp.diags(scale_all)
-        rows = np.asarray(abs(W).sum(axis=1)).ravel()
+        rows = np.asarray(abs(scaled[1]).sum(axis=1)).ravel()
         return float(_allreduce(self.A.getComm(), float(rows.max()) if rows.size else 0.0, "max"))
+
+    def real_part_bound(self) -> float | None:
+        """γ ≥ Re σ for every eigenvalue when B = D is diagonal positive: Re σ =
+        yᴴS y/(yᴴy) with y = D^{1/2}x and S = D^{-1/2}·sym(A)·D^{-1/2}, so Re σ ≤ λ_max(S),
+        bounded by Gershgorin's discs (one pass over the rows, with a slack of a few units of
+        rounding per entry).  None when B is not diagonal.  Collective."""
+        scaled = self._scaled(1.0)
+        if scaled is None:
+            return None
+        lo, S = scaled
+        rows = np.arange(S.shape[0])
+        diag = np.asarray(S[rows, lo + rows]).ravel()
+        radius = np.asarray(abs(S).sum(axis=1)).ravel() - np.abs(diag)
+        slack = 4 * np.finfo(float).eps * (np.diff(S.indptr) + 2) * (np.abs(diag) + radius)
+        local = float((diag + radius + slack).max()) if rows.size else -np.inf
+        return float(_allreduce(self.A.getComm(), local, "max"))
 
 
 def diagonal_of(B, B_local=None):

@@ -72,6 +72,18 @@ class DivergenceVerdict:
     eicp: object
     proof: DivergenceProof
 
+    def real_part_bound(self) -> tuple[float, str] | None:
+        """``(γ, how)`` when the proof bounds every eigenvalue of the pencil, not only the
+        MEiCP's solutions: a Rayleigh bound sym(A) − γ·sym(B) ≺ 0 gives Re σ < γ for each
+        (x*Ax = σ·x*Bx with x complex); None otherwise (the flutter search's Bendixson bound
+        uses it: :func:`~meicp.contact.flutter.search_flutter`)."""
+        if self.proof.test == "rayleigh-inertia":
+            return 0.0, "the divergence verdict's Rayleigh bound at 0: sym(A) ≺ 0"
+        if self.proof.test == "rayleigh-window+condensed-windows" and self.proof.sigma_window:
+            top = float(self.proof.sigma_window[1])
+            return top, f"the divergence verdict's Rayleigh bound at σ_max = {top:.6g}"
+        return None
+
 
 def all_held() -> DivergenceVerdict:
     """The verdict of a pencil with no retained DOF: nothing can move."""
