@@ -8,8 +8,6 @@ import sys
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from meicp.core import matrix
 from meicp.core.errors import MeicpError, PetscSolveError, ProblemError
@@ -87,18 +85,3 @@ def test_importing_meicp_registers_the_petsc_kind_and_methods_without_starting_p
     assert out.stdout.split()[0] == "False"
     for name in ("active-set", "semismooth", "newton", "tao"):
         assert f"'{name}'" in out.stdout
-
-
-@settings(max_examples=40, deadline=None)
-@given(rows=st.integers(0, 12), cols=st.integers(1, 15), density=st.floats(0.0, 1.0), seed=st.integers(0, 10**6))
-def test_split_columns_is_fancy_indexing_in_one_pass(rows, cols, density, seed):
-    """``split_columns(M, first)`` = ``(M[:, first], M[:, rest])`` for any sparsity, empty
-    rows and sides included, with canonical indices (MUMPS and the padding read them)."""
-    rng = np.random.default_rng(seed)
-    M = sp.random(rows, cols, density=density, random_state=seed, format="csr")
-    first = np.flatnonzero(rng.random(cols) < 0.6)
-    rest = np.setdiff1d(np.arange(cols), first)
-    a, b = matrix.split_columns(M, first)
-    for got, want in ((a, M[:, first]), (b, M[:, rest])):
-        assert got.shape == want.shape and got.has_canonical_format
-        assert np.array_equal(got.toarray(), want.toarray())

@@ -98,26 +98,3 @@ def release(M) -> None:
     """Free what the matrix holds outside Python (a PETSc Mat's memory: collective); nothing
     for NumPy and SciPy, which the garbage collector frees."""
 
-
-
-def split_columns(M, first: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """``(M[:, first], M[:, rest])`` of a SciPy matrix, ``first`` and ``rest`` (the other
-    columns) each sorted, both as CSR with canonical indices: one pass over the entries
-    (SciPy's fancy column indexing, two of them, took 1.4 s at 10⁶ DOFs against 0.2 s)."""
-    M = sp.csr_matrix(M)
-    n = M.shape[1]
-    in_first = np.zeros(n, dtype=bool)
-    in_first[first] = True
-    new = np.empty(n, dtype=np.int64)
-    new[in_first] = np.arange(int(in_first.sum()))
-    new[~in_first] = np.arange(n - int(in_first.sum()))
-    rows = np.repeat(np.arange(M.shape[0]), np.diff(M.indptr))
-    parts = []
-    for side, width in ((in_first, int(in_first.sum())), (~in_first, n - int(in_first.sum()))):
-        take = side[M.indices]
-        counts = np.bincount(rows[take], minlength=M.shape[0])
-        indptr = np.concatenate([[0], np.cumsum(counts)])
-        part = sp.csr_matrix((M.data[take], new[M.indices[take]], indptr), shape=(M.shape[0], width))
-        part.has_sorted_indices = M.has_sorted_indices
-        parts.append(part)
-    return parts[0], parts[1]
