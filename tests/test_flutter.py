@@ -458,11 +458,11 @@ def test_the_skew_bound_is_its_formula_and_bounds_every_imaginary_part():
     assert np.abs(sigma.imag).max() <= np.abs(W).sum(axis=1).max()
 
 
-def test_complex_and_real_form_factors_return_the_same_pairs():
-    """The complex ZMUMPS factor of A − τB and the real LU of the 2n form K_τ are two
-    factorisations of one operator: the same eigenvalues near τ, each pair's backward error
-    recomputed on (A, B); the search says which factor it used."""
-    from meicp.petsc.flutter import SlidingPencilOps, complex_shift_solve
+@pytest.fixture
+def shifted_ops():
+    """``(ops, τ)``: the sliding pencil of a 16-column lattice (μ = 2) as PETSc Mats with its
+    :class:`SlidingPencilOps`, and a target just above its fastest flutter eigenvalue."""
+    from meicp.petsc.flutter import SlidingPencilOps
     from meicp.petsc.mat import mat_from_scipy
 
     scene = lattice(16, (3, 3), 2.0)
@@ -472,11 +472,21 @@ def test_complex_and_real_form_factors_return_the_same_pairs():
     A, B = mat_from_scipy(None, A_s), mat_from_scipy(None, B_s)
     try:
         with SlidingPencilOps(A, B) as ops:
-            got, info = complex_shift_solve(ops, tau, nev=3, ncv=16)
-            ref, ref_info = complex_shift_solve(ops, tau, nev=3, ncv=16, options={"real_form": True})
+            yield ops, tau
     finally:
         A.destroy()
         B.destroy()
+
+
+def test_complex_and_real_form_factors_return_the_same_pairs(shifted_ops):
+    """The complex ZMUMPS factor of A − τB and the real LU of the 2n form K_τ are two
+    factorisations of one operator: the same eigenvalues near τ, each pair's backward error
+    recomputed on (A, B); the search says which factor it used."""
+    from meicp.petsc.flutter import complex_shift_solve
+
+    ops, tau = shifted_ops
+    got, info = complex_shift_solve(ops, tau, nev=3, ncv=16)
+    ref, ref_info = complex_shift_solve(ops, tau, nev=3, ncv=16, options={"real_form": True})
     assert info["factor"] == "complex" and ref_info["factor"] == "real 2n"
     assert len(got) >= 2 and all(res <= 1e-12 for _, _, res in got)
     nearest = sorted(ref, key=lambda p: abs(p[0] - tau))[:2]
@@ -484,25 +494,15 @@ def test_complex_and_real_form_factors_return_the_same_pairs():
         assert min(abs(sigma - g[0]) for g in got) <= 1e-10 * abs(sigma)
 
 
-def test_a_loose_solve_whose_pairs_fail_the_gate_is_made_again_strictly():
+def test_a_loose_solve_whose_pairs_fail_the_gate_is_made_again_strictly(shifted_ops):
     """SLEPc at a loose tolerance converges pairs whose backward errors on (A, B) miss the
     gate: the same operator is solved again at the strict tolerance, from those pairs, and
     its pairs pass; without a strict tolerance the loose pairs are all there is."""
-    from meicp.petsc.flutter import SlidingPencilOps, complex_shift_solve
-    from meicp.petsc.mat import mat_from_scipy
+    from meicp.petsc.flutter import complex_shift_solve
 
-    scene = lattice(16, (3, 3), 2.0)
-    with pencil(scene) as pen:
-        A_s, B_s = pen.A.tocsr(), pen.B.tocsr()
-    tau = fl.dense_flutter(A_s, B_s).modes[0].sigma + 0.01j
-    A, B = mat_from_scipy(None, A_s), mat_from_scipy(None, B_s)
-    try:
-        with SlidingPencilOps(A, B) as ops:
-            loose, loose_info = complex_shift_solve(ops, tau, nev=1, ncv=3, tol=1e-1, gate=1e-12)
-            strict, strict_info = complex_shift_solve(ops, tau, nev=1, ncv=3, tol=1e-1, gate=1e-12, strict_tol=1e-13)
-    finally:
-        A.destroy()
-        B.destroy()
+    ops, tau = shifted_ops
+    loose, loose_info = complex_shift_solve(ops, tau, nev=1, ncv=3, tol=1e-1, gate=1e-12)
+    strict, strict_info = complex_shift_solve(ops, tau, nev=1, ncv=3, tol=1e-1, gate=1e-12, strict_tol=1e-13)
     assert loose_info["solves"] == 1 and loose and not any(res <= 1e-12 for _, _, res in loose)
     assert strict_info["solves"] == 2 and any(res <= 1e-12 for _, _, res in strict)
     assert strict_info["iterations"] > loose_info["iterations"]

@@ -12,30 +12,23 @@ every branch has it, excluded only when none has it.
 Two paths, both ending in :class:`~meicp.contact.result.FlutterMode` s with their
 backward errors (a mode above :data:`RESIDUAL_TOL` is never reported):
 
-- **dense** (retained DOFs ≤ :data:`~meicp.core.limits.FLUTTER_DENSE_MAX`): every eigenvalue by LAPACK (QR on
-  D^{-1/2}AD^{-1/2} when B = D is diagonal, else QZ), each with the rounding radius
-  ``r = n·u·(‖A‖₁ + |σ|‖B‖₁)·κ(σ)``, κ from the left and right eigenvectors: non-real when
-  |Im σ| > r; certified real when |Im σ| ≤ r and its disk meets no other; else borderline.
-  flutter = True with a certified non-real mode, False when every eigenvalue is certified
-  real (a proof), None otherwise.  A symmetric A with symmetric positive definite B is
-  proved flutter-free without QZ.
+- **dense** (retained DOFs ≤ :data:`~meicp.core.limits.FLUTTER_DENSE_MAX`): every eigenvalue
+  by LAPACK with its rounding radius, a proof either way unless borderline
+  (:mod:`.flutter_dense`).
 - **search** (larger): complex shift-and-invert (:mod:`meicp.petsc.flutter`) at targets
-  taken from a dense *contact-strip proxy* of the scene (the fastest modes are slip waves
-  along the contact, whose σ hardly depends on the lattice's size), or on a λ-line when
-  no proxy exists.  It can prove flutter (a certified mode), never its absence: flutter is
-  True or None, and the evidence says which disks of the σ-plane were searched.
+  taken from a dense *contact-strip proxy* of the scene (:mod:`.flutter_proxy`), or on a
+  λ-line when no proxy exists.  It can prove flutter (a certified mode), never its absence:
+  flutter is True or None, and the evidence says which disks of the σ-plane were searched;
+  its growth bracket is the fastest certified mode below and Bendixson's rectangle above.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import logging
 import time
 
 import numpy as np
-import scipy.linalg as sl
-import scipy.sparse as sp
 
 from ..core import limits
 from ..core.comm import available_memory_on, mpi_comm
@@ -44,12 +37,15 @@ from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
 from .damped import damped_flutter
-from .flutter_growth import FlutterGrowth, combine_growths, dense_growth, search_growth
+from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, backward_error, dense_flutter
+from .flutter_growth import FlutterGrowth, combine_growths, search_growth
+from .flutter_proxy import (PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, interface_proxy, proxy_targets, sliding_window,
+                            strip_proxy)
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
-from .lines import BASE, ContactState, state_names
+from .lines import BASE, ContactState
 from .on_root import on_root
-from .problem import pencil, pencil_of
-from .result import FlutterMode, growth_frequency
+from .problem import pencil_of
+from .result import FlutterMode
 
 log = logging.getLogger("meicp")
 
@@ -57,16 +53,9 @@ log = logging.getLogger("meicp")
 #: to count as non-real; MARGIN stands for the unknown condition number (κ ≤ 1.1e3 measured
 #: on the dense cases)
 MARGIN = 1e6
-#: large-scale path defaults: proxy targets, eigenpairs per target, Krylov basis
-SEARCH_TARGETS = 3
+#: large-scale path defaults: eigenpairs per target, Krylov basis
 SEARCH_NEV = 4
 SEARCH_NCV = 16
-#: contact-strip proxy: columns, rows, and the share of a proxy mode's energy in the rows
-#: next to the contact for it to count as contact-localised
-PROXY_NX = 32
-PROXY_ROWS = 8
-PROXY_LOCALISED = 0.6
-PROXY_NEAR_ROWS = 3
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
 #: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
@@ -99,138 +88,7 @@ LOW_RANK_TOL = 1e-10
 #: two: docs/benchmarks-notes.md, "LARGE_EPS_TOL")
 LARGE_EPS_TOL = 1e-8
 STRICT_EPS_TOL = 1e-10
-#: the bracket of a pencil proved flutter-free: no non-real eigenvalue at all
-NO_FLUTTER = FlutterGrowth(0.0, 0.0, "no flutter (a proof)")
 
-
-def _norm1(M: np.ndarray) -> float:
-    return float(np.abs(M).sum(axis=0).max()) if M.size else 0.0
-
-
-def _fastest_first(modes: list) -> list:
-    return sorted(modes, key=lambda m: (-growth_frequency(m.sigma)[0], -abs(m.sigma.imag)))
-
-
-def _normalise(x: np.ndarray) -> np.ndarray:
-    """‖x‖₂ = 1 with its largest entry real positive (a canonical phase)."""
-    x = np.asarray(x, dtype=complex)
-    k = int(np.argmax(np.abs(x)))
-    return x / (x[k] / abs(x[k]) * np.linalg.norm(x)) if x[k] != 0 else x
-
-
-def backward_error(A, B, sigma: complex, x: np.ndarray, norm_A: float, norm_B: float) -> float:
-    """‖Ax − σBx‖₂ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖₂) (A, B dense or SciPy), evaluated on A/‖A‖₁ and
-    B/‖B‖₁ so that extreme scales do not overflow; inf when it still cannot be evaluated
-    (such a pair is never certified)."""
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        x = x / np.linalg.norm(x)
-        ratio = norm_B / norm_A
-        r = (A @ x) / norm_A - (sigma * ratio) * ((B @ x) / norm_B)
-        value = np.linalg.norm(r) / (1.0 + abs(sigma) * ratio)
-    return float(value) if np.isfinite(value) and np.isfinite(ratio) and ratio > 0 else float("inf")
-
-
-def _symmetric_definite(A: np.ndarray, B: np.ndarray) -> bool:
-    if not (np.array_equal(A, A.T) and np.array_equal(B, B.T)):
-        return False
-    try:
-        np.linalg.cholesky(B)
-    except np.linalg.LinAlgError:
-        return False
-    return True
-
-
-def dense_flutter(A, B, *, residual_tol: float = RESIDUAL_TOL, radius_factor: float | None = None) -> PencilFlutter:
-    """Every flutter mode of the pencil (A, B) (NumPy or SciPy, serial) and the verdict, a
-    proof either way unless borderline (module docstring).  ``radius_factor``: the multiple
-    of u·(‖A‖ + |σ|‖B‖)·κ that counts as rounding (default n)."""
-    A = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
-    B = B.toarray() if sp.issparse(B) else np.asarray(B, dtype=float)
-    n = A.shape[0]
-    if n == 0:
-        return PencilFlutter(False, evidence="no retained DOF: nothing can move (a proof)", complete=True,
-                             growth=NO_FLUTTER)
-    if _symmetric_definite(A, B):
-        return PencilFlutter(False, evidence="symmetric A and symmetric positive definite B: every σ is real "
-                                             "(no friction coupling reaches the retained DOFs) — a proof",
-                             complete=True, growth=NO_FLUTTER)
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
-        return PencilFlutter(None, evidence="the pencil has entries that are not finite: undecided",
-                             growth=FlutterGrowth(0.0, None, "entries not finite: no bound"))
-    try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
-            return _dense_spectrum(A, B, residual_tol, radius_factor)
-    except (np.linalg.LinAlgError, ValueError) as exc:  # QZ did not converge, or NaN came out
-        return PencilFlutter(None, evidence=f"the dense eigen-solve (LAPACK) failed ({exc}): undecided",
-                             growth=FlutterGrowth(0.0, None, "the dense eigen-solve failed: no bound"))
-
-
-def _dense_spectrum(A: np.ndarray, B: np.ndarray, residual_tol: float, radius_factor) -> PencilFlutter:
-    n = A.shape[0]
-    norm_A, norm_B = _norm1(A), _norm1(B)
-    d = np.diag(B)
-    if np.all(d > 0) and np.count_nonzero(B) == np.count_nonzero(d):
-        s = 1.0 / np.sqrt(d)
-        C = s[:, None] * A * s[None, :]
-        w, VL, VR = sl.eig(C, left=True, right=True)
-        X = s[:, None] * VR
-        kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
-                 / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), VR)), 1e-300))
-        scale = _norm1(C) + np.abs(w)
-        infinite = np.zeros(n, dtype=bool)
-        how = "dense QR of D^-1/2 A D^-1/2 (B = D diagonal)"
-    else:
-        (alpha, beta), VL, VR = sl.eig(A, B, left=True, right=True, homogeneous_eigvals=True)
-        # infinite: β at the rounding level of B *relative to* α on A's scale (|σ|·‖B‖ beyond
-        # ‖A‖/(n·u)); without the norms a change of units (K ×1e7, M ÷1e7, every σ ×1e14) made
-        # every finite σ past 1/(n·u) "infinite" and the dense path proved flutter absent
-        infinite = np.abs(beta) * norm_A <= n * np.finfo(float).eps * np.abs(alpha) * norm_B
-        w = np.where(infinite, np.inf, alpha / np.where(infinite, 1.0, beta))
-        X = VR
-        kappa = (np.linalg.norm(VL, axis=0) * np.linalg.norm(VR, axis=0)
-                 / np.maximum(np.abs(np.einsum("ij,ij->j", VL.conj(), B @ VR)), 1e-300))
-        scale = norm_A + np.where(infinite, 0.0, np.abs(w)) * norm_B
-        how = "dense QZ of (A, B)"
-    factor = float(n) if radius_factor is None else radius_factor
-    radius = np.where(infinite, np.inf, factor * (np.finfo(float).eps / 2) * scale * kappa)
-    radius = np.where(np.isfinite(radius), radius, np.inf)  # no bound: never certified either way
-    unresolved = ~infinite & ~np.isfinite(w)
-    finite = ~infinite & ~unresolved
-    nonreal = finite & (np.abs(w.imag) > radius)
-    near_axis = finite & ~nonreal
-    certified_real = np.zeros(n, dtype=bool)
-    fin = np.flatnonzero(finite)
-    order = fin[np.argsort(w[fin].real)]
-    re = w[order].real
-    reach = radius[order].max() if order.size else 0.0
-    for i in np.flatnonzero(near_axis):  # certified when its disk meets no other eigenvalue's disk
-        lo = np.searchsorted(re, w[i].real - radius[i] - reach, "left")
-        hi = np.searchsorted(re, w[i].real + radius[i] + reach, "right")
-        near = order[lo:hi]
-        near = near[near != i]
-        certified_real[i] = not np.any(np.abs(w[near] - w[i]) <= radius[near] + radius[i])
-    borderline = (near_axis & ~certified_real) | unresolved
-    modes, rejected = [], []
-    for i in np.flatnonzero(nonreal & (w.imag > 0)):
-        res = backward_error(A, B, complex(w[i]), X[:, i], norm_A, norm_B)
-        if res <= residual_tol:
-            modes.append(FlutterCandidate(complex(w[i]), _normalise(X[:, i]), res, float(radius[i]), how))
-        else:
-            rejected.append(RejectedPair(complex(w[i]), res))
-    counts = {"eigenvalues": n, "nonreal_pairs": int(nonreal.sum()) // 2,
-              "certified_real": int(certified_real.sum()), "borderline": int(borderline.sum()),
-              "infinite": int(infinite.sum()), "rejected": len(rejected)}
-    flutter = True if modes else (None if borderline.any() or rejected else False)
-    infinite_note = f", {int(infinite.sum())} infinite (not modes)" if infinite.any() else ""
-    rejected_note = (f", {len(rejected)} non-real pair(s) failing the residual gate {residual_tol:g} "
-                     "(not reported)" if rejected else "")
-    evidence = (f"{how} of all {n} eigenvalues{infinite_note}: {counts['nonreal_pairs']} non-real pair(s), "
-                f"{counts['certified_real']} certified real, {counts['borderline']} borderline "
-                f"(non-reality at rounding level){rejected_note}"
-                + (" — a proof" if flutter is not None else ": undecided"))
-    growth = dense_growth(w, radius, ~infinite & ~certified_real, modes, how)
-    return PencilFlutter(flutter, _fastest_first(modes), evidence, complete=True, counts=counts, rejected=rejected,
-                         growth=growth)
 
 
 def lambda_line_targets(growth: float, frequencies) -> list[complex]:
@@ -373,115 +231,6 @@ def combine_branches(flags) -> bool | None:
     return None
 
 
-def _take_rows(layers, budget: int) -> list:
-    """The layers met in order, each cut to the rows left of ``budget``, until it is spent."""
-    kept, left = [], budget
-    for layer in layers:
-        if left <= 0:
-            break
-        kept.append(dataclasses.replace(layer, rows=min(layer.rows, left)))
-        left -= kept[-1].rows
-    return kept
-
-
-def strip_proxy(scene, base_states):
-    """The contact-strip proxy: the bottom :data:`PROXY_ROWS` rows (the cut held fixed) and
-    :data:`PROXY_NX` columns from the middle of the base, with the base's resolved states.
-    None when the scene has no base contact, a frictional interface or an embedded band."""
-    if scene.contact is None or scene.embedded or any(i.kind == "frictional" for i in scene.interfaces):
-        return None
-    nx = min(scene.nx, PROXY_NX)
-    kept = _take_rows(scene.layers, PROXY_ROWS)
-    cut = sum(layer.rows for layer in kept) < scene.ny
-    start = (len(base_states) - nx) // 2
-    return dataclasses.replace(
-        scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=tuple(kept),
-        interfaces=tuple(i for i in scene.interfaces if i.index < len(kept) - 1),
-        boundary=dataclasses.replace(scene.boundary, top="fixed") if cut else scene.boundary,
-        contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
-
-
-def sliding_window(states, width: int) -> int:
-    """The first column of the ``width`` consecutive contacts with the most slipping ones (the
-    middlemost such window): where a proxy of a partly sticking contact line is cut."""
-    sliding = np.array([ContactState(s).slip_sign != 0 for s in states], dtype=int)
-    counts = np.convolve(sliding, np.ones(width, dtype=int), mode="valid")
-    best = np.flatnonzero(counts == counts.max())
-    middle = (len(states) - width) / 2
-    return int(best[np.argmin(np.abs(best - middle))])
-
-
-def interface_proxy(scene, line):
-    """The interface-strip proxy of a frictional interface ``line`` (states resolved): the
-    :data:`PROXY_ROWS` // 2 rows on each side of it (a cut held fixed) and :data:`PROXY_NX`
-    columns where most of its contacts slip, with their states.  None when the scene has a
-    rigid base contact, an embedded band, or another frictional interface within those rows."""
-    if scene.contact is not None or scene.embedded:
-        return None
-    index = next(i.index for i in scene.interfaces if i.kind == "frictional" and i.below == line.name)
-    below = _take_rows(reversed(scene.layers[:index + 1]), PROXY_ROWS // 2)[::-1]
-    above = _take_rows(scene.layers[index + 1:], PROXY_ROWS // 2)
-    first = index + 1 - len(below)  # the scene's index of the proxy's first layer
-    kept = tuple(below + above)
-    interfaces = tuple(dataclasses.replace(i, index=i.index - first) for i in scene.interfaces
-                       if first <= i.index < first + len(kept) - 1)
-    if sum(i.kind == "frictional" for i in interfaces) != 1:
-        return None
-    nx = min(scene.nx, PROXY_NX)
-    start = sliding_window(line.states, nx)
-    states = tuple(state_names(line.states[start:start + nx]))
-    interfaces = tuple(dataclasses.replace(i, states=states) if i.index == index - first else i for i in interfaces)
-    cut_below = sum(layer.rows for layer in below) < sum(layer.rows for layer in scene.layers[:index + 1])
-    cut_above = sum(layer.rows for layer in above) < sum(layer.rows for layer in scene.layers[index + 1:])
-    boundary = dataclasses.replace(scene.boundary, bottom="fixed" if cut_below else scene.boundary.bottom,
-                                   top="fixed" if cut_above else scene.boundary.top)
-    return dataclasses.replace(scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=kept,
-                               interfaces=interfaces, boundary=boundary, load=None)
-
-
-def _proxy_of(scene, lines):
-    """(proxy scene, its rows next to the contact) for the one sliding contact line of a scene,
-    or (None, None): the base strip, else the strip around the one sliding frictional
-    interface."""
-    sliding = [line for line in lines if any(ContactState(s).slip_sign for s in line.states)]
-    base = next((line for line in lines if line.name == BASE), None)
-    if base is not None:
-        return strip_proxy(scene, list(base.states)), np.arange(PROXY_NEAR_ROWS)
-    if len(sliding) != 1:
-        return None, None
-    proxy = interface_proxy(scene, sliding[0])
-    if proxy is None:
-        return None, None
-    index = next(i.index for i in proxy.interfaces if i.kind == "frictional")
-    top_of_lower = sum(layer.rows for layer in proxy.layers[:index + 1])
-    return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
-
-
-def proxy_targets(scene, lines, count: int = SEARCH_TARGETS) -> list[complex]:
-    """Up to ``count`` targets: σ of the proxy's fastest contact-localised flutter modes, at
-    least 0.1|σ| apart (all its modes when none is localised); [] without a proxy.  ``lines``:
-    the scene's contact lines with their states resolved (a pencil's ``lines``)."""
-    proxy, near = _proxy_of(scene, lines)
-    if proxy is None:
-        return []
-    with pencil(proxy) as pen:  # a lattice of its own, PROXY_NX × PROXY_ROWS, serial
-        red = pen.maps
-        found = dense_flutter(pen.A, pen.B) if pen.A is not None else PencilFlutter(False)
-
-    def near_contact(x):
-        energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))
-        return energy[near].sum() / energy.sum()
-
-    candidates = [m for m in found.modes if near_contact(m.x) >= PROXY_LOCALISED] or found.modes
-    targets = []
-    for m in candidates:
-        if all(abs(m.sigma - t) > 0.1 * abs(t) for t in targets):
-            targets.append(m.sigma)
-        if len(targets) == count:
-            break
-    return targets
-
-
 def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, options: dict | None = None,
                    targets=None, **search) -> PencilFlutter:
     """The flutter analysis of one sliding pencil ``pen`` (a
@@ -588,6 +337,8 @@ def not_analysed(reason: str) -> FlutterVerdict:
     return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
 
 
-__all__ = ["RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
-           "analyze_flutter", "dense_flutter", "grazing_branches", "lambda_line_targets", "pencil_flutter",
-           "proxy_targets", "search_flutter"]
+# the dense path and the proxies, named here as well: the scene-level API of flutter
+__all__ = ["PROXY_NX", "PROXY_ROWS", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter",
+           "RejectedPair", "analyze_flutter", "backward_error", "dense_flutter", "grazing_branches",
+           "interface_proxy", "lambda_line_targets", "pencil_flutter", "proxy_targets", "search_flutter",
+           "sliding_window", "strip_proxy"]

@@ -30,7 +30,8 @@ import numpy as np
 from ...core import limits
 from ...core.errors import ConvergenceError
 from ...petsc.pencil import reduced_pencil
-from ..flutter import _to_mode, dense_flutter, grazing_branches, pencil_flutter
+from ..flutter import _to_mode, grazing_branches, pencil_flutter
+from ..flutter_dense import dense_flutter
 from ..flutter_cover import PencilFamily, cover_step
 from ..maps import reduced_system
 from ..on_root import on_root
