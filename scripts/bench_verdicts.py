@@ -8,12 +8,15 @@ enumeration, and what a verdict costs against one SLEPc eigen-solve of the same 
     .venv/bin/python scripts/bench_verdicts.py check --count 80   # -> verdicts_check.csv
     flock /work/scratch/bench.lock mpirun -n 2 .venv/bin/python scripts/bench_verdicts.py cost \\
         --nx 1000 --rows 250 250 --mu 3 1 --shear 0.5 0           # -> verdicts_cost.csv
+    flock /work/scratch/bench.lock mpirun -n 2 .venv/bin/python scripts/bench_verdicts.py cost \\
+        --mu 2 --states slip- --shear -0.3 --flutter              # -> verdicts_cost_flutter.csv
     .venv/bin/python scripts/bench_verdicts.py chart
     .venv/bin/python scripts/bench_verdicts.py first      # -> verdicts_first_search.csv
 
 Scenes: ``two_layer_scene`` (k = 1 / 5, ρ = 1 / 2, top fixed, sides free), every base node
 in one slip state, |J| = nx sliding contacts; flutter is not part of these timings
-(``flutter=False``: issue 15's benchmark covers it).
+(``flutter=False``: issue 15's benchmark covers it), except with ``cost --flutter``: the whole
+verdict, divergence and flutter, against the eigen-solve (issue 29's cost).
 """
 
 from __future__ import annotations
@@ -37,12 +40,13 @@ COST = ["nx", "rows", "dofs", "J", "ranks", "state", "shear", "mu", "divergence"
         "eigensolve_s", "ratio", "load1"]
 FIRST = ["family", "nx", "rows", "contrast", "state", "shear", "mu", "theta_positive", "theta", "first_search",
          "first_found", "divergence", "test"]
+COST_FLUTTER = COST + ["flutter", "flutter_s", "growth_lower", "growth_upper", "commit", "flutter_evidence"]
 MUS = np.geomspace(0.05, 6.0, 8)
 
 
-def _verdict(scene, comm=None, method=None):
+def _verdict(scene, comm=None, method=None, flutter=False):
     t0 = time.perf_counter()
-    r = meicp.analyze(scene, comm=comm, method=method, flutter=False)
+    r = meicp.analyze(scene, comm=comm, method=method, flutter=flutter)
     return r, time.perf_counter() - t0
 
 
@@ -111,7 +115,7 @@ def cost(args):
             comm.Barrier()
             eig = time.perf_counter() - t0
         comm.Barrier()
-        r, t = _verdict(scene, comm=comm)
+        r, t = _verdict(scene, comm=comm, flutter=args.flutter)
         if comm.rank == 0:
             rows.append({"nx": args.nx, "rows": f"{args.rows[0]}+{args.rows[1]}", "dofs": r.sizes.get("dofs"),
                          "J": r.sizes.get("complementarity"), "ranks": comm.size, "state": state,
@@ -120,10 +124,28 @@ def cost(args):
                          "sigma": f"{r.modes[0].sigma:.13g}" if r.modes else "", "analyze_s": f"{t:.2f}",
                          "eigensolve_s": f"{eig:.2f}", "ratio": f"{t / eig:.2f}",
                          "load1": f"{os.getloadavg()[0]:.1f}"})
+            if args.flutter:
+                g = r.flutter_growth
+                rows[-1].update(flutter=r.flutter, flutter_s=f"{r.timings.get('flutter', 0.0):.2f}",
+                                growth_lower=f"{g.lower:.6g}" if g else "",
+                                growth_upper="" if g is None or g.upper is None else f"{g.upper:.6g}",
+                                commit=_commit(), flutter_evidence=r.flutter_evidence[:300])
+                print(r.flutter_evidence, flush=True)
             print(rows[-1], flush=True)
             print(r.evidence, flush=True)
     if comm.rank == 0:
-        write_rows(csv_path("verdicts_cost"), rows, COST)
+        if args.flutter:
+            write_rows(csv_path("verdicts_cost_flutter"), rows, COST_FLUTTER)
+        else:
+            write_rows(csv_path("verdicts_cost"), rows, COST)
+
+
+def _commit() -> str:
+    import subprocess
+
+    out = subprocess.run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "rev-parse", "--short", "HEAD"],
+                         capture_output=True, text=True)
+    return out.stdout.strip()
 
 
 def chart(args):
@@ -216,6 +238,8 @@ def main():
     k.add_argument("--states", nargs="+", default=["slip-", "slip+"])
     k.add_argument("--shear", type=float, nargs="+", default=[0.5, 0.0],
                    help="reference shears, each run beside the others (0: the shipped scenes' lattice)")
+    k.add_argument("--flutter", action="store_true",
+                   help="the whole verdict, flutter included (-> verdicts_cost_flutter.csv; issue 29's cost)")
     sub.add_parser("chart")
     w = sub.add_parser("first")
     w.add_argument("--sizes", nargs="+", default=["400:10+10", "1000:25+25"], help="two-layer lattices nx:lower+upper")

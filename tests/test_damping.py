@@ -398,3 +398,31 @@ def test_a_damped_scene_past_the_enumeration_limits_is_refused(monkeypatch):
     monkeypatch.setattr(limits, "ENUMERATE_N", 10)
     with pytest.raises(ProblemError, match="the scalable damped path is not supported yet"):
         meicp.analyze(damped(TWO_LAYERS, eta=(0.02, 0.02)))
+
+
+def test_damping_is_written_to_results_h5_and_the_lattice_xdmf(tmp_path):
+    """A damped analysis writes what it used: results.h5 ``/damping`` (read back by
+    load_results) and each layer's viscosity; the lattice file each bond's viscosity — the
+    mean of its two materials' across them, as C is assembled — and ParaView's XDMF names it
+    ``bond_viscosity``.  An undamped scene's files have none of it."""
+    import h5py
+
+    from meicp.io.results import write_results
+
+    scene = damped(TWO_LAYERS, eta=(0.02, 0.1))
+    result = meicp.analyze(scene)
+    paths = write_results(tmp_path / "damped", scene, result, plots=False)
+    back = meicp.load_results(paths["results"])
+    assert back.damping == result.damping and back.damping.viscosity == {"A": 0.02, "B": 0.1}
+    with h5py.File(paths["results"]) as f:
+        assert list(f["scene_summary/layers/viscosity"][()]) == [0.02, 0.1]
+    with h5py.File(paths["lattice"]) as f:
+        ends, eta = f["bonds/connectivity"][()], f["bonds/viscosity"][()]
+        material = f["nodes/material"][()]
+    expected = 0.5 * (np.array([0.02, 0.1])[material[ends[:, 0]]] + np.array([0.02, 0.1])[material[ends[:, 1]]])
+    assert np.array_equal(eta, expected) and set(np.round(eta, 12)) == {0.02, 0.06, 0.1}
+    assert 'Attribute Name="bond_viscosity"' in paths["xdmf"].read_text()
+    plain = write_results(tmp_path / "plain", TWO_LAYERS, meicp.analyze(TWO_LAYERS), plots=False)
+    assert meicp.load_results(plain["results"]).damping is None and "viscosity" not in plain["xdmf"].read_text()
+    with h5py.File(plain["results"]) as f, h5py.File(plain["lattice"]) as g:
+        assert "damping" not in f and "bonds/viscosity" not in g

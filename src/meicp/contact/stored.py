@@ -15,6 +15,7 @@ import numpy as np
 
 from ..eicp.problem import EiCPResult
 from .critical_friction.result import CriticalFriction, Onset
+from .damped import DampingUsed
 from .divergence.verdict import DivergenceProof
 from .flutter_growth import FlutterGrowth
 from .result import FlutterMode, InstabilityResult, Mode
@@ -53,6 +54,9 @@ def result_from_record(record: dict) -> InstabilityResult:
               for e in (record["eicp"] or [])]
     r.static = _static(record["static"], r)
     r.critical_friction = _critical_friction(record["critical_friction"])
+    damping = record.get("damping")
+    r.damping = None if damping is None else DampingUsed(damping["viscosity"], damping["interface_viscosity"],
+                                                         damping["mass"])
     return r
 
 

@@ -11,6 +11,7 @@ HDF5 path                  shape, type            content
 ``/bonds/kind``            (n_bonds,) i1          0 horizontal, 1 vertical, 2 diagonal
                                                   (i,j)-(i+1,j+1), 3 antidiagonal (i+1,j)-(i,j+1)
 ``/bonds/stiffness``       (n_bonds,) f8          k of each bond
+``/bonds/viscosity``       (n_bonds,) f8          η of each bond (damped scenes only, docs/damping.md)
 ``/bonds/interface``       (n_bonds,) i1          1 when the bond joins two materials
 ``/nodes/material``        (n_nodes,) i4          index into ``/materials``
 ``/nodes/mass``            (n_nodes,) f8          lumped mass ρ a³
@@ -20,7 +21,8 @@ HDF5 path                  shape, type            content
 ``/fields/NAME``           (n_nodes, 3) f8        caller's per-DOF vectors, padded to 3 comps
                            or (n_nodes,) f8       caller's per-node scalars
 ``/materials/*``           (n_mat,)               name, kind, stiffness, density; and
-                                                  ``interface_stiffness`` (n_mat, n_mat)
+                                                  ``interface_stiffness`` (n_mat, n_mat); damped:
+                                                  ``viscosity``, ``interface_viscosity``
 ``/scene``                 scalar string          the scene file's TOML text, when known
 =========================  =====================  ============================================
 
@@ -64,7 +66,8 @@ FORMAT = "meicp-lattice"
 FORMAT_VERSION = 1
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]*$")
 #: names of /nodes/* and /bonds/* attributes in the XDMF file, not available to fields
-_RESERVED = ("material", "mass", "fixed", "contact", "i", "j", "bond_kind", "bond_stiffness", "bond_interface")
+_RESERVED = ("material", "mass", "fixed", "contact", "i", "j", "bond_kind", "bond_stiffness", "bond_interface",
+             "bond_viscosity")
 #: the statement every meicp file carries about units (see the module docstring)
 UNITS_CONVENTION = ("dimensionless: meicp attaches no unit to any number; every value is in the consistent "
                     "system of units the scene's numbers are in (lengths in the unit of lattice.spacing, "
@@ -86,6 +89,7 @@ DESCRIPTIONS = {
     "bonds/connectivity": {"long_name": "node numbers j*nx + i of the two ends of each bond"},
     "bonds/kind": coded(BOND_KINDS, long_name="bond direction kind"),
     "bonds/stiffness": {"long_name": "bond stiffness k (force per length)"},
+    "bonds/viscosity": {"long_name": "bond viscosity eta, the dashpot beside k (force time per length; damped scenes only)"},
     "bonds/interface": coded(("inside_one_material", "joins_two_materials"), long_name="bond joins two materials"),
     "nodes/material": {"long_name": "index of each node's material into /materials"},
     "nodes/mass": {"long_name": "lumped mass rho a^3 of each node, both DOFs (mass)"},
@@ -98,6 +102,8 @@ DESCRIPTIONS = {
     "materials/stiffness": {"long_name": "bond stiffness inside each material (force per length)"},
     "materials/density": {"long_name": "density of each material (mass per length^3)"},
     "materials/interface_stiffness": {"long_name": "stiffness of a bond joining two materials (force per length)"},
+    "materials/viscosity": {"long_name": "bond viscosity inside each material (damped scenes only)"},
+    "materials/interface_viscosity": {"long_name": "viscosity of a bond joining two materials (damped scenes only)"},
 }
 
 
@@ -162,12 +168,13 @@ def _band_data(model: LatticeModel, j0: int, j1: int) -> dict:
     contact = np.zeros(mat.size, dtype=np.int8)
     if model.boundary.bottom == "contact" and j0 == 0 and j1 > 0:
         contact[:model.nx] = 1
-    ends, kinds, ks = model.bonds(j0, j1)
+    ends, kinds, ks, etas = model.bonds(j0, j1, viscosity=True)
     ext = model.material(j0, min(j1 + 1, model.ny))  # bonds reach at most one row up
     base = j0 * model.nx
     iface = (ext[ends[:, 0] - base] != ext[ends[:, 1] - base]).astype(np.int8) if ends.size else \
         np.zeros(0, dtype=np.int8)
-    return {
+    damping = {"bonds/viscosity": etas.astype(float)} if model.damped else {}
+    return damping | {
         "geometry/points": pts,
         "geometry/ij": np.stack([ii, jj], axis=1).astype(np.int32),
         "nodes/material": mat,
@@ -184,7 +191,9 @@ def _band_data(model: LatticeModel, j0: int, j1: int) -> dict:
 
 
 def _materials(model: LatticeModel) -> dict:
-    return {
+    damping = {"materials/viscosity": np.array([m.viscosity for m in model.materials]),
+               "materials/interface_viscosity": np.array(model.cmat)} if model.damped else {}
+    return damping | {
         "materials/name": np.array([m.name.encode() for m in model.materials], dtype="S64"),
         "materials/kind": np.array([m.kind.encode() for m in model.materials], dtype="S16"),
         "materials/stiffness": np.array([m.stiffness for m in model.materials]),

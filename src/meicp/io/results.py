@@ -7,7 +7,8 @@ In the output directory::
     lattice.xdmf    fields ``mode_0``, ``mode_1``... (each scaled as in the PNG),
                     ``contact_state`` (codes below), the node indices ``i`` and ``j``, and,
                     when the static equilibrium was solved, ``static_u`` (its displacement)
-                    and the contact reactions ``r_n``, ``r_t`` (NaN off the contact nodes):
+                    and the contact reactions ``r_n``, ``r_t`` (NaN off the contact nodes);
+                    a damped scene's bonds carry ``bond_viscosity`` beside ``bond_stiffness``:
                     open the .xdmf in ParaView, Warp By Vector with ``mode_k`` (scale 1 = the
                     PNG's picture)
     mode.png        the fastest mode on the deformed lattice (or the "stable" lattice)
@@ -44,8 +45,12 @@ In the output directory::
                                    else regenerated from the parsed scene)
 ``/scene_summary``                 attributes nx, ny, n_nodes, n_dofs, spacing, shear,
                                    boundary_<side>, base_friction; ``layers/{name, rows,
-                                   stiffness, density}``, ``interfaces/{below, kind,
-                                   stiffness, friction}`` (NaN where not applicable)
+                                   stiffness, density}`` (and ``viscosity`` when damped),
+                                   ``interfaces/{below, kind, stiffness, friction}`` (NaN
+                                   where not applicable)
+``/damping`` (damped scenes only)  attribute ``mass`` (α of ``[damping] mass``); subgroups
+                                   ``viscosity`` and ``interface_viscosity``, one attribute
+                                   per material / bonded interface (docs/damping.md)
 ``/versions``                      attributes: python, numpy, scipy, petsc, slepc, mpi, ...
 ``/sizes``, ``/timings``           attributes copied from the result (timings in seconds)
 ``/contact``                       attribute ``codes`` (the per-node code legend)

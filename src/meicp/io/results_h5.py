@@ -102,6 +102,9 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         g.create_dataset("layers/rows", data=np.array([l.rows for l in scene.layers], dtype=np.int64))
         g.create_dataset("layers/stiffness", data=np.array([l.stiffness for l in scene.layers]))
         g.create_dataset("layers/density", data=np.array([l.density for l in scene.layers]))
+        if getattr(result, "damping", None) is not None:  # what the analysis used (docs/damping.md)
+            g.create_dataset("layers/viscosity", data=np.array([l.viscosity or 0.0 for l in scene.layers]))
+            _set_record(f.create_group("damping"), result.damping.to_dict())
         if scene.interfaces:
             nan = float("nan")
             g.create_dataset("interfaces/below", data=_strings([i.below for i in scene.interfaces], 64))

@@ -29,7 +29,8 @@ def read_results(path) -> dict:
     interface_support, and radius, branch, found_by for flutter), ``proofs`` (dicts, as
     ``DivergenceProof.to_dict`` wrote them), ``eicp`` (method, status, message per MEiCP, or
     None when not recorded), ``static`` (attributes and arrays, or None),
-    ``critical_friction`` (its record, or None) and ``overrides``."""
+    ``critical_friction`` (its record, or None), ``damping`` (``DampingUsed.to_dict``, or None:
+    undamped) and ``overrides``."""
     import h5py
 
     if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
@@ -61,7 +62,16 @@ def read_results(path) -> dict:
         record["eicp"] = json.loads(cert["eicp_outcomes"]) if "eicp_outcomes" in cert else None
         record["static"] = _static(f.get("static"))
         record["critical_friction"] = _critical_friction(f.get("critical_friction"))
+        record["damping"] = _damping(f.get("damping"))
     return record
+
+
+def _damping(g) -> dict | None:
+    """The damping the analysis used (``DampingUsed.to_dict``), or None: undamped."""
+    if g is None:
+        return None
+    return {"viscosity": _attrs(g.get("viscosity")), "interface_viscosity": _attrs(g.get("interface_viscosity")),
+            "mass": float(_attrs(g).get("mass", 0.0))}
 
 
 def _critical_friction(g) -> dict | None:

@@ -282,20 +282,23 @@ class LatticeModel:
             out[:, :, s] = k
         return out.reshape(rows * nx, 9)
 
-    def bonds(self, j0: int = 0, j1: int | None = None):
+    def bonds(self, j0: int = 0, j1: int | None = None, *, viscosity: bool = False):
         """The bonds stored from rows ``[j0, j1)`` (each bond once, from its lower-numbered
         end), ordered by (first node, kind).  Returns ``(ends (m, 2) int64, kind (m,) int8,
-        stiffness (m,))``.  Concatenating the results of consecutive row bands gives the
-        result for the whole lattice."""
+        stiffness (m,))``, and the bonds' viscosity (m,) fourth with ``viscosity``.
+        Concatenating the results of consecutive row bands gives the result for the whole
+        lattice."""
         j1 = self.ny if j1 is None else j1
         grid = self.material_grid(j0, j1, pad=1)
         nm = len(self.materials)
         kext = np.zeros((nm + 1, nm + 1))
         kext[:nm, :nm] = self.kmat
+        cext = np.zeros((nm + 1, nm + 1))
+        cext[:nm, :nm] = self.cmat
         rows, nx = j1 - j0, self.nx
         jj, ii = np.divmod(np.arange(rows * nx), nx)
         jj = jj + j0
-        ends, kinds, ks = [], [], []
+        ends, kinds, ks, cs = [], [], [], []
         for kind, ((ai, aj), (bi, bj)) in enumerate(BOND_ENDS):
             ia, ja, ib, jb = ii + ai, jj + aj, ii + bi, jj + bj
             ok = (np.maximum(ia, ib) < nx) & (np.maximum(ja, jb) < self.ny)
@@ -310,11 +313,12 @@ class LatticeModel:
             ends.append(np.stack([a, b], axis=1))
             kinds.append(np.full(a.size, kind, dtype=np.int8))
             ks.append(k[keep])
+            cs.append(cext[ma, mb][keep])  # a bond cut by a frictional interface has no k: not kept
         ends = np.concatenate(ends).astype(np.int64)
         kinds = np.concatenate(kinds)
-        ks = np.concatenate(ks)
         order = np.lexsort((kinds, ends[:, 0]))
-        return ends[order], kinds[order], ks[order]
+        out = ends[order], kinds[order], np.concatenate(ks)[order]
+        return (*out, np.concatenate(cs)[order]) if viscosity else out
 
     def describe(self) -> str:
         """A few lines for a person: size, layers, bands, interfaces, boundary."""
