@@ -143,7 +143,8 @@ def test_search_result_rows_say_fastest_found(monkeypatch):
     # the upper end is Bendixson's rectangle: finite, loose, and written as a number
     assert "proved ≤" in rows["flutter growth"]
     assert r.to_dict()["flutter_growth"]["upper"] == r.flutter_growth.upper < math.inf
-    assert "upper_infinite" not in r.to_dict()["flutter_growth"]
+    assert "upper_infinite" not in r.to_dict()["flutter_growth"] and r.to_dict()["flutter_growth"]["upper_loose"]
+    assert "by Bendixson's rectangle" in rows["flutter growth"]
 
 
 def test_flutter_dense_max_buys_the_exact_bracket(monkeypatch, cli):

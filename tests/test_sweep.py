@@ -65,13 +65,16 @@ def test_each_row_is_analyze_of_the_changed_scene(scene):
 
 def test_flutter_growth_bound_is_proved_by_the_dense_spectrum_only(scene, monkeypatch):
     """Dense path: an upper bound within rounding of the mode found (0 without flutter);
-    the search path sees part of the spectrum: no bound, the growth found is a lower bound."""
+    the search path sees part of the spectrum: its Bendixson bound is proved but loose, so the
+    row has no bound and the growth found is a lower bound."""
     rows = meicp.sweep(scene, "friction", [0.3, 2.5], progress=False).rows
     assert rows[0].flutter is False and rows[0].flutter_growth_bound == 0.0
     assert rows[1].flutter_growth <= rows[1].flutter_growth_bound <= rows[1].flutter_growth + 1e-8
     monkeypatch.setattr(limits, "FLUTTER_DENSE_MAX", 0)
     row = meicp.sweep(scene, "friction", [2.5], progress=False).rows[0]
     assert row.flutter is True and row.flutter_growth_bound is None
+    searched = meicp.analyze(scene.with_friction(2.5)).flutter_growth
+    assert searched.loose and searched.upper >= rows[1].flutter_growth_bound
     assert row.flutter_growth == pytest.approx(rows[1].flutter_growth, rel=1e-8)
 
 

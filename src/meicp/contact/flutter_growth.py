@@ -48,12 +48,15 @@ class FlutterGrowth:
 
     lower: a certified flutter mode grows at least this fast (0 when none is certified).
     upper: no non-real eigenvalue of the sliding pencil grows faster (proved); None when no
-    bound is proved (the large-scale search).  ``upper == 0``: no flutter at all (a proof).
-    evidence: how each end was obtained.  ``float(growth)`` is ``lower``."""
+    bound is proved.  ``upper == 0``: no flutter at all (a proof).  evidence: how each end
+    was obtained.  loose: the upper end bounds the whole spectrum from outside (Bendixson's
+    rectangle, the large-scale search), not from the eigenvalues themselves (the dense
+    path): proved, but far above the fastest mode.  ``float(growth)`` is ``lower``."""
 
     lower: float
     upper: float | None
     evidence: str = ""
+    loose: bool = False
 
     def __float__(self) -> float:
         return float(self.lower)
@@ -80,7 +83,8 @@ class FlutterGrowth:
         if self.exact:
             return f"{self.lower:.8g}: the fastest, proved (bracket [{self.lower:.10g}, {self.upper:.10g}])"
         found = "fastest found" if self.lower > 0 else "no certified mode"
-        bound = "no upper bound proved" if self.upper is None else f"proved ≤ {self.upper:.6g}"
+        bound = ("no upper bound proved" if self.upper is None else f"proved ≤ {self.upper:.6g}"
+                 + (" by Bendixson's rectangle" if self.loose else ""))
         return f"≥ {self.lower:.6g} ({found}, not proved the fastest; {bound})"
 
     def to_dict(self) -> dict:
@@ -88,7 +92,7 @@ class FlutterGrowth:
         ``upper_infinite: 1`` (:mod:`meicp.core.json_values`)."""
         upper = math.inf if self.upper is None else float(self.upper)
         return json_ready({"lower": float(self.lower), "upper": upper, "exact": self.exact,
-                           "evidence": self.evidence})
+                           "upper_loose": bool(self.loose), "evidence": self.evidence})
 
 
 def dense_growth(w: np.ndarray, radius: np.ndarray, candidates: np.ndarray, modes: list,
@@ -130,7 +134,7 @@ def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None
         return FlutterGrowth(float(lower), None, text + f"no upper bound: {why_no_bound}")
     real_max, imag_max, how = rectangle
     upper = max(rectangle_growth(real_max, imag_max), lower)
-    return FlutterGrowth(float(lower), float(upper), text + (
+    return FlutterGrowth(float(lower), float(upper), loose=True, evidence=text + (
         f"every eigenvalue has Re σ ≤ {real_max:.6g} ({how}) and |Im σ| ≤ {imag_max:.6g} (skew-part bound), "
         f"so none grows faster than {upper:.6g} (Bendixson's rectangle, a proof; {why_no_bound})"))
 
@@ -149,4 +153,5 @@ def combine_growths(parts: list) -> FlutterGrowth | None:
     if len(parts) == 1:
         return parts[0]
     upper = None if any(p.upper is None for p in parts) else max(p.upper for p in parts)
-    return FlutterGrowth(min(p.lower for p in parts), upper, " | ".join(p.evidence for p in parts))
+    return FlutterGrowth(min(p.lower for p in parts), upper, " | ".join(p.evidence for p in parts),
+                         loose=any(p.loose for p in parts))

@@ -41,7 +41,8 @@ def result_from_record(record: dict) -> InstabilityResult:
     if "flutter_growth_lower" in a:
         upper = float(a["flutter_growth_upper"])
         r.flutter_growth = FlutterGrowth(float(a["flutter_growth_lower"]), None if np.isnan(upper) else upper,
-                                         a.get("flutter_growth_evidence", ""))
+                                         a.get("flutter_growth_evidence", ""),
+                                         loose=bool(a.get("flutter_growth_upper_loose", 0)))
     r.modes = [Mode(sigma=m["sigma"], x=m["x"], support=m["support"], residual=m["residual"],
                     interface_support=m["interface_support"]) for m in record["modes"]]
     r.flutter_modes = [FlutterMode(sigma=m["sigma"], x=m["x"], residual=m["residual"], support=m["support"],

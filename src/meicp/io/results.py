@@ -34,6 +34,7 @@ In the output directory::
                                    flutter decided the verdict), ``flutter_evidence``,
                                    ``n_flutter_modes``, ``flutter_growth_lower`` /
                                    ``_upper`` (NaN: no bound proved) / ``_exact`` /
+                                   ``_upper_loose`` (1: Bendixson's rectangle) /
                                    ``_evidence`` (the certified bracket of the fastest
                                    flutter growth rate), ``divergence_tests`` (the test behind
                                    each MEiCP's divergence verdict: enumerate,

@@ -211,7 +211,8 @@ def _growth_attrs(growth) -> dict:
         return {}
     return {"flutter_growth_lower": float(growth.lower),
             "flutter_growth_upper": float("nan") if growth.upper is None else float(growth.upper),
-            "flutter_growth_exact": int(growth.exact), "flutter_growth_evidence": growth.evidence}
+            "flutter_growth_exact": int(growth.exact), "flutter_growth_upper_loose": int(growth.loose),
+            "flutter_growth_evidence": growth.evidence}
 
 
 def _write_flutter_modes(g, modes: list, n: int) -> None:

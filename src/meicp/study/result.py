@@ -31,7 +31,8 @@ class SweepRow:
     the fastest divergence mode (None without one); growth: λ = √σ.  flutter_growth: Re λ of
     the fastest flutter mode *found* — a lower bound on the fastest; flutter_growth_bound:
     an upper bound on every flutter mode's Re λ when the whole spectrum proves one (0 when
-    flutter is excluded), else None; flutter_frequency: |Im λ| of the mode found.  status:
+    flutter is excluded), else None (the search's Bendixson bound, proved but loose, is in
+    the analysis' ``flutter_growth``, not here: the chart would read it as the fastest); flutter_frequency: |Im λ| of the mode found.  status:
     the analysis' (``solved``, ``inconclusive``, ``failed`` when it raised).  seconds: its
     wall time.  evidence: what decided each verdict, shortened."""
 
@@ -61,7 +62,8 @@ class SweepRow:
         return cls(value=float(value), verdict=result.verdict, stable=result.stable, divergence=result.divergence,
                    sigma=float(result.modes[0].sigma) if result.modes else None, flutter=result.flutter,
                    flutter_growth=fast.growth_rate if fast else None,
-                   flutter_growth_bound=None if result.flutter_growth is None else result.flutter_growth.upper,
+                   flutter_growth_bound=(None if result.flutter_growth is None or result.flutter_growth.loose
+                                         else result.flutter_growth.upper),
                    flutter_frequency=fast.frequency if fast else None, status=result.status,
                    seconds=float(elapsed), evidence=evidence[:EVIDENCE_CHARS])
 

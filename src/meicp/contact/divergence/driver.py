@@ -8,8 +8,9 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
    first (:func:`.sigma_window.probe_top`), has a Ritz value θ > 0.
 2. **First search** from the window's top θ: a short active-set search (:mod:`.search`),
    only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
-   slow vibrations and gives up after one restart (docs/benchmarks-notes.md, "first search
-   only above 0"), so the proof comes first and the whole search after it.
+   slow vibrations and gives up after one restart
+   (docs/benchmarks-notes.md, "first search only above 0"), so the proof comes first and the
+   whole search after it.
 3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).
 4. **σ-window**, only where that proof stopped at some σ = c: a certified σ_max
    (:mod:`.sigma_window`); ``σ_max ≤ c`` completes the proof, else the search goes on from σ_max.
