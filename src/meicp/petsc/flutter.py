@@ -273,7 +273,7 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     B2 = mat_from_local_csr(pcomm, sp.kron(ops.B_local, _I2, format="csr"), 2 * n)
     eps = SLEPc.EPS().create(comm=pcomm)
     K = shell = factor = None
-    vectors = []  # the eigenvectors converged, the start of a stricter solve
+    vectors = []  # the eigenvectors converged: the start of a stricter solve, when one is made
     try:
         if real_form:
             K_local = (sp.kron(ops.A_local - tau.real * ops.B_local, _I2, format="csr")
@@ -296,15 +296,21 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 eps.setOperators(K)
             scope.configure(eps)  # setFromOptions, last
             eps.solve()
-        pairs, info = _converged_pairs(eps, ops, tau, real_form, B2, vectors)
+        pairs, info = _converged_pairs(eps, ops, tau, real_form, B2)
         info["solves"] = 1
         if (gate is not None and strict_tol is not None and strict_tol < eps.getTolerances()[0] and pairs
                 and not any(res <= gate for _, _, res in pairs)):
+            # the eigenvectors converged (real and imaginary parts) start the stricter solve;
+            # copied only here, where they are needed (each is a vector of the 2n form)
+            for i in range(eps.getConverged()):
+                zr, zi = B2.createVecRight(), B2.createVecRight()
+                eps.getEigenvector(i, zr, zi)
+                vectors += [zr, zi]
             eps.setTolerances(tol=strict_tol)
             eps.setInitialSpace(vectors)
             eps.solve()
             iterations = info["iterations"]
-            pairs, info = _converged_pairs(eps, ops, tau, real_form, B2, [])
+            pairs, info = _converged_pairs(eps, ops, tau, real_form, B2)
             info["iterations"] += iterations
             info["solves"] = 2
         info["seconds"] = time.perf_counter() - t0
@@ -315,10 +321,9 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 obj.destroy()
 
 
-def _converged_pairs(eps, ops: SlidingPencilOps, tau: complex, real_form: bool, B2, vectors: list) -> tuple[list, dict]:
+def _converged_pairs(eps, ops: SlidingPencilOps, tau: complex, real_form: bool, B2) -> tuple[list, dict]:
     """The converged pairs of a shift-and-invert EPS on the 2n form, back on (A, B) (see
-    :func:`complex_shift_solve`), and its info; the real and imaginary parts of each
-    eigenvector taken are appended to ``vectors`` (new Vecs: the caller destroys them)."""
+    :func:`complex_shift_solve`), and its info."""
     nconv = eps.getConverged()
     info = {"nconv": nconv, "iterations": eps.getIterationNumber(),
             "factor": "real 2n" if real_form else "complex"}
@@ -350,7 +355,6 @@ def _converged_pairs(eps, ops: SlidingPencilOps, tau: complex, real_form: bool, 
             continue  # the other member of a conjugate pair
         seen.append(sigma)
         pairs.append((sigma, ops.gather(x), ops.residual(sigma, x)))
-        vectors += [zr.copy(), zi.copy()]
     info["radius"] = radius
     zr.destroy()
     zi.destroy()
