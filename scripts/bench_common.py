@@ -238,6 +238,22 @@ def slepc_eigensolve(A, B, nev: int, *, hermitian: bool = False, extra: dict | N
     return vals, its
 
 
+#: how a divergence verdict is drawn in the family charts, by its value in the CSVs:
+#: (marker, colour, label)
+VERDICT_STYLE = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
+                 "None": ("s", "tab:gray", "undecided")}
+
+
+def scatter_verdicts(ax, rows, x, y, **style) -> None:
+    """One scatter per divergence verdict of ``rows`` (CSV dicts), labelled with its count;
+    ``x``, ``y``: the coordinates of a row."""
+    for key, (marker, color, label) in VERDICT_STYLE.items():
+        sel = [r for r in rows if r["divergence"] == key]
+        if sel:
+            ax.scatter([x(r) for r in sel], [y(r) for r in sel], marker=marker, color=color,
+                       label=f"{label}: {len(sel)}", **style)
+
+
 def save_figure(fig, path, *, dpi: int = 110, rect=None) -> None:
     """Lay out (within ``rect`` when a title or legend sits outside the axes), write and close
     a chart."""

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from bench_common import csv_path, read_rows, save_figure, slepc_eigensolve, write_rows
+from bench_common import csv_path, read_rows, save_figure, scatter_verdicts, slepc_eigensolve, write_rows
 import meicp
 from meicp.contact import pencil
 from meicp.core.matrix import is_petsc_mat
@@ -149,14 +149,8 @@ def chart(args):
 
     rows = read_rows(csv_path("interfaces_family"))
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.3))
-    style = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
-             "None": ("s", "tab:gray", "undecided")}
-    for key, (marker, color, label) in style.items():
-        sel = [r for r in rows if r["divergence"] == key]
-        if sel:
-            left.scatter([float(r["mu"]) * (1.06 if r["state"] == "slip-" else 1.0) for r in sel],
-                         [int(r["dofs"]) * (1.15 if r["contrast"] == "2/1" else 1.0) for r in sel],
-                         marker=marker, color=color, label=f"{label}: {len(sel)}", alpha=0.75)
+    scatter_verdicts(left, rows, lambda r: float(r["mu"]) * (1.06 if r["state"] == "slip-" else 1.0),
+                     lambda r: int(r["dofs"]) * (1.15 if r["contrast"] == "2/1" else 1.0), alpha=0.75)
     left.set_xscale("log")
     left.set_yscale("log")
     left.set_xlabel("friction μ (slip− shifted right)")

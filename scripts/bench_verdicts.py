@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from bench_common import csv_path, slepc_eigensolve, write_rows
+from bench_common import csv_path, scatter_verdicts, slepc_eigensolve, write_rows
 import meicp
 from meicp.contact import pencil
 from meicp.core.matrix import is_petsc_mat
@@ -161,13 +161,8 @@ def chart(args):
         with csv_path("verdicts_cost").open() as f:
             rows += list(csv.DictReader(f))
     fig, ax = plt.subplots(figsize=(8.5, 4.5))
-    style = {"True": ("x", "tab:red", "mode (unstable)"), "False": ("o", "tab:green", "proof (stable)"),
-             "None": ("s", "tab:gray", "undecided")}
-    for key, (marker, color, label) in style.items():
-        sel = [r for r in rows if r["divergence"] == key]
-        if sel:
-            ax.scatter([float(r["mu"]) for r in sel], [int(r["J"]) * (1 + 0.03 * (r["state"] == "slip-")) for r in sel],
-                       marker=marker, color=color, label=f"{label}: {len(sel)}", alpha=0.7)
+    scatter_verdicts(ax, rows, lambda r: float(r["mu"]), lambda r: int(r["J"]) * (1 + 0.03 * (r["state"] == "slip-")),
+                     alpha=0.7)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("friction μ")

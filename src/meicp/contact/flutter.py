@@ -37,10 +37,9 @@ from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
 from .damped import damped_flutter
-from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, backward_error, dense_flutter
+from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import FlutterGrowth, combine_growths, search_growth
-from .flutter_proxy import (PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, interface_proxy, proxy_targets, sliding_window,
-                            strip_proxy)
+from .flutter_proxy import PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, proxy_targets
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState
 from .on_root import on_root
@@ -337,8 +336,6 @@ def not_analysed(reason: str) -> FlutterVerdict:
     return FlutterVerdict(None, [], f"not analysed ({reason}): undecided")
 
 
-# the dense path and the proxies, named here as well: the scene-level API of flutter
-__all__ = ["PROXY_NX", "PROXY_ROWS", "RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter",
-           "RejectedPair", "analyze_flutter", "backward_error", "dense_flutter", "grazing_branches",
-           "interface_proxy", "lambda_line_targets", "pencil_flutter", "proxy_targets", "search_flutter",
-           "sliding_window", "strip_proxy"]
+__all__ = ["RESIDUAL_TOL", "FlutterCandidate", "FlutterVerdict", "PencilFlutter", "RejectedPair",
+           "analyze_flutter", "dense_flutter", "grazing_branches", "lambda_line_targets", "pencil_flutter",
+           "proxy_targets", "search_flutter"]

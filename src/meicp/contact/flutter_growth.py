@@ -130,10 +130,11 @@ def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None
     its corner (:func:`rectangle_growth`), a proof however loose; else no upper bound."""
     lower = _certified_lower(modes)
     text = f"the fastest certified mode found grows at least {lower:.6g}; "
-    if rectangle is None or not math.isfinite(rectangle_growth(*rectangle[:2])):
+    corner = math.inf if rectangle is None else rectangle_growth(*rectangle[:2])
+    if not math.isfinite(corner):
         return FlutterGrowth(float(lower), None, text + f"no upper bound: {why_no_bound}")
     real_max, imag_max, how = rectangle
-    upper = max(rectangle_growth(real_max, imag_max), lower)
+    upper = max(corner, lower)
     return FlutterGrowth(float(lower), float(upper), loose=True, evidence=text + (
         f"every eigenvalue has Re σ ≤ {real_max:.6g} ({how}) and |Im σ| ≤ {imag_max:.6g} (skew-part bound), "
         f"so none grows faster than {upper:.6g} (Bendixson's rectangle, a proof; {why_no_bound})"))
