@@ -6,6 +6,7 @@ lowers it (frictional interface: the destabilisation paradox).
 
     .venv/bin/python scripts/bench_damping.py run      # -> damping_growth.csv
     .venv/bin/python scripts/bench_damping.py chart    # -> damping_growth.png
+    .venv/bin/python scripts/bench_damping.py scale --lock LOCK   # -> damping_scale.csv, .png
 
 Scenes (the dense damped references, where every answer is a proof or a certified mode):
 ``data/scenes/two_layers.toml`` (every base node slip+) and the 6 × 4 frictional interface
@@ -14,6 +15,14 @@ the divergence verdict and λ of its fastest certified mode; the flutter verdict
 growth bracket (exact on the dense path).  Growth 0 where a verdict is proved absent; an
 undecided verdict leaves a gap.  The grid's first μ with certified flutter is a measured
 threshold, not a proved onset (the damped critical friction is not built).
+
+``scale``: the damped verdict at 10⁶ DOFs on ``--ranks`` ranks (issue 31, deliverable 5): each
+shipped 10⁶-DOF scene file of ``--scenes`` with viscosity ``--eta`` in every layer (written
+to a temporary directory), ``meicp solve --json`` on it and, side by side under the same
+lock, one SLEPc eigen-solve of the *undamped* pencil of the same lattice
+(``bench_scenes.py eigensolve``) — the issue's reference.  The damped divergence is
+undecided past the dense enumeration (its scalable path is not built); the row says what the
+damped flutter search at scale (docs/damping.md) found and what it cost.
 """
 
 from __future__ import annotations
@@ -27,6 +36,9 @@ import meicp
 from meicp.examples import two_layer_scene
 from meicp.io.scene import scene_from_dict
 
+SCALE_FIELDS = ["scene", "eta", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "flutter",
+                "flutter_lower", "modes", "solve_s", "flutter_s", "static_s", "eigensolve_s", "ratio", "flutter_ratio",
+                "peak_mb", "load1", "date", "commit", "flutter_evidence"]
 FIELDS = ["scene", "eta", "mu", "divergence", "divergence_growth", "flutter", "flutter_lower", "flutter_upper",
           "flutter_exact", "seconds"]
 #: viscosities of the two layers: none, equal, a viscous base layer under a less viscous one
@@ -109,6 +121,88 @@ def chart(args) -> None:
     save_figure(fig, csv_path("damping_growth").with_suffix(".png"))
 
 
+def scale(args) -> None:
+    import datetime
+    import json
+    import os
+    import tempfile
+    from pathlib import Path
+
+    import bench_scenes as bs
+    from meicp.io.results_records import scene_to_toml
+
+    path = csv_path("damping_scale")
+    before = {tuple(r.values()) for r in read_rows(path)} if path.exists() else set()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for stem in args.scenes:
+            # the damped divergence is decided by its own path: a scene's [solver] method (e.g.
+            # "active-set") is not one of its methods and is left out
+            data = meicp.load_scene(ROOT / "data" / "scenes" / f"{stem}.toml").to_dict()
+            data.pop("solver", None)
+            scene = with_viscosity(scene_from_dict(data), (args.eta,) * 99)
+            damped = Path(tmp) / f"{stem}_damped.toml"
+            damped.write_text(scene_to_toml(scene))
+            with bs._Lock(args.lock):  # the two commands side by side, nothing heavy between
+                load1 = os.getloadavg()[0]
+                out, peaks, wall, timed_out = bs._run(bs._command(args, args.ranks, [
+                    "-m", "meicp", "solve", str(damped), "--no-output", "--json", "-q"]), args.timeout)
+                eig_out, _, _, _ = bs._run(bs._command(args, args.ranks, [bs.__file__, "eigensolve", str(damped)]),
+                                           args.timeout)
+            doc = json.loads(out) if out.strip() else {}
+            eig = json.loads(eig_out.strip().splitlines()[-1]) if eig_out.strip() else {}
+            solve_s = doc.get("wall", {}).get("total") or wall
+            timings = doc.get("timings", {})
+            growth = doc.get("flutter_growth") or {}
+            seconds = eig.get("seconds")
+            row = {"scene": f"{stem}.toml", "eta": args.eta, "dofs": 2 * scene.nx * scene.ny,
+                   "retained": doc.get("sizes", {}).get("retained", ""),
+                   "contacts": doc.get("sizes", {}).get("complementarity", ""), "ranks": args.ranks,
+                   "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
+                   "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
+                   "flutter_lower": growth.get("lower", ""), "modes": len(doc.get("flutter_modes") or []),
+                   "solve_s": f"{solve_s:.2f}", "flutter_s": f"{timings.get('flutter', float('nan')):.2f}",
+                   "static_s": f"{timings.get('static', 0.0):.2f}",
+                   "eigensolve_s": f"{seconds:.3f}" if seconds else "",
+                   "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
+                   "flutter_ratio": f"{timings.get('flutter', float('nan')) / seconds:.2f}" if seconds else "",
+                   "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
+                   "date": datetime.date.today().isoformat(), "commit": bs._commit(),
+                   "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
+            rows.append(row)
+            print({k: row[k] for k in SCALE_FIELDS[:18]}, flush=True)
+            write_rows(path, rows, SCALE_FIELDS, keep=lambda r: tuple(r.values()) in before)
+    scale_chart(args)
+
+
+def scale_chart(args) -> None:
+    """Each scene's latest damped run: its time split against the undamped eigen-solve."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    latest = {r["scene"]: r for r in read_rows(csv_path("damping_scale"))}
+    rows = list(latest.values())
+    fig, ax = plt.subplots(figsize=(7, 0.9 + 0.8 * len(rows)))
+    for k, r in enumerate(rows):
+        eig = float(r["eigensolve_s"]) if r["eigensolve_s"] else float("nan")
+        static, flutter, total = float(r["static_s"]), float(r["flutter_s"]), float(r["solve_s"])
+        ax.barh(k, static, color="tab:gray", label="static equilibrium" if k == 0 else None)
+        ax.barh(k, flutter, left=static, color="tab:orange", label="damped flutter search" if k == 0 else None)
+        ax.barh(k, total - static - flutter, left=static + flutter, color="tab:blue",
+                label="the rest (assembly, reduction, output)" if k == 0 else None)
+        ax.plot([5 * eig], [k], "k|", ms=22, label="5 × one undamped eigen-solve" if k == 0 else None)
+        ax.text(total, k, f"  {total:.0f} s = {total / eig:.1f}× eigen-solve ({r['verdict']}, "
+                          f"flutter growth ≥ {float(r['flutter_lower'] or 0):.3g})", va="center", fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{r['scene']}\nη = {r['eta']}, {int(r['dofs']):,} DOFs, {r['ranks']} ranks"
+                                     for r in rows], fontsize=7)
+    ax.set_xlabel("wall seconds (meicp solve)")
+    ax.set_title("Damped verdict at scale: damped flutter search (divergence undecided: not built)", fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_xlim(0, 1.6 * max(float(r["solve_s"]) for r in rows))
+    save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
@@ -117,6 +211,13 @@ def main() -> None:
     r.add_argument("--mu-max", type=float, default=3.0)
     r.add_argument("--points", type=int, default=60)
     sub.add_parser("chart")
+    c = sub.add_parser("scale")
+    c.add_argument("--scenes", nargs="+", default=["extensive_interface"], help="shipped scene file stems")
+    c.add_argument("--eta", type=float, default=0.02, help="viscosity of every layer")
+    c.add_argument("--ranks", type=int, default=2)
+    c.add_argument("--lock", help="flock this file around both commands")
+    c.add_argument("--timeout", type=float, default=1800.0, help="seconds per command")
+    sub.add_parser("scale_chart")
     args = p.parse_args()
     globals()[args.what](args)
 

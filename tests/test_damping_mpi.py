@@ -54,3 +54,22 @@ def test_the_damped_verdict_is_the_same_on_one_and_two_ranks(comm, scene):
     assert [m.sigma for m in two.flutter_modes] == pytest.approx([m.sigma for m in one.flutter_modes], rel=1e-12)
     assert two.flutter_growth.lower == pytest.approx(one.flutter_growth.lower, rel=1e-12)
     assert np.allclose(comm.bcast(two.flutter_growth.lower, root=0), two.flutter_growth.lower)
+
+
+def test_the_damped_flutter_search_is_the_same_on_one_and_two_ranks(comm):
+    """The search past the dense limit (companion shift-and-invert, distributed factor and
+    Krylov basis) certifies the same modes on 2 ranks as on one."""
+    from mpi4py import MPI
+
+    from .test_damped_search import SCENES
+
+    scene = SCENES["interface"]
+    two = meicp.analyze(scene, comm=comm, flutter_dense_max=10)
+    one = meicp.analyze(scene, comm=MPI.COMM_SELF, flutter_dense_max=10)
+    assert two.flutter is True and one.flutter is True
+    assert "companion form" in two.flutter_evidence
+    lam_one = np.array([np.sqrt(m.sigma) for m in one.flutter_modes])
+    for m in two.flutter_modes:  # the same eigenvalues (a Krylov run may converge a different subset)
+        assert np.min(np.abs(lam_one - np.sqrt(m.sigma))) <= 1e-10 * abs(m.sigma) ** 0.5
+    assert two.flutter_modes[0].growth_rate == pytest.approx(one.flutter_modes[0].growth_rate, rel=1e-10)
+    assert comm.bcast(two.flutter_growth.lower, root=0) == two.flutter_growth.lower

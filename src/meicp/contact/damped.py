@@ -17,15 +17,17 @@ With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``),
   Re λ < −r decays and one within r of the real axis whose disk meets no other's is real;
   anything else is borderline (undecided).
 
-Both run only where the undamped dense paths would (the enumeration's limits, and
-``FLUTTER_DENSE_MAX`` retained DOFs); the scalable damped paths are not built yet, so a
-larger damped scene — and every other path that would leave C out (the modal analysis, the
-critical friction, the window procedure) — is a ProblemError saying so (:func:`refuse`),
-never an undamped answer.
+The divergence runs only where the enumeration's limits allow; past them it is *undecided*
+(the scalable damped divergence path is not built yet), so that the damped flutter search at
+scale (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX`` retained DOFs) can still prove the
+lattice unstable.  Every other path that would leave C out (the modal analysis, the critical
+friction, the window procedure, a named divergence method) is a ProblemError saying so
+(:func:`refuse`), never an undamped answer.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from types import SimpleNamespace
 
@@ -43,6 +45,8 @@ from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_growth import FlutterGrowth
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
 from .on_root import on_root
+
+log = logging.getLogger("meicp")
 
 
 
@@ -100,8 +104,9 @@ def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) -> DivergenceVerdict:
     """The divergence verdict of a damped pencil: the quadratic MEiCP enumerated (modes with
-    σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  ProblemError when the
-    problem is past the enumeration's limits or another method is asked for.  Collective."""
+    σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Undecided past the
+    enumeration's limits (method ``"auto"``); ProblemError when another method is asked for,
+    or ``"enumerate"`` past its limits.  Collective."""
     red = pen.maps
     r, n_j = int(red.retained.size), int(red.J.size)
     if method not in (None, "auto", "enumerate"):
@@ -110,10 +115,14 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
     if method == "enumerate":
         check_enumeration_size(n_j, r, options)
     elif not enumeration_is_small(r, n_j):
-        raise ProblemError(f"damped divergence with {r} retained DOFs and {n_j} complementarity pairs is past "
-                           f"the dense enumeration's limits ({limits.ENUMERATE_N} DOFs, {limits.ENUMERATE_J} pairs, "
-                           f"2^|J|·r³ ≤ {limits.ENUMERATE_FLOPS:g}): the scalable damped path is not supported "
-                           "yet (docs/damping.md)")
+        # undecided, not an error: the damped flutter search at scale may still prove the
+        # lattice unstable (a certified flutter mode answers the question)
+        text = (f"undecided: damped divergence with {r} retained DOFs and {n_j} complementarity pairs is past the "
+                f"dense enumeration's limits ({limits.ENUMERATE_N} DOFs, {limits.ENUMERATE_J} pairs, 2^|J|·r³ ≤ "
+                f"{limits.ENUMERATE_FLOPS:g}) and the scalable damped divergence path (searches and proofs of the "
+                "quadratic MEiCP) is not built yet: nothing was proved about λ ≥ 0 (docs/damping.md)")
+        log.info("%s", text)
+        return DivergenceVerdict([], None, text, None, DivergenceProof("", text))
     max_j = options.get("max_j") if method == "enumerate" else None
 
     A, B, D = _dense(pen)  # collective when the pencil is distributed
@@ -151,7 +160,7 @@ def damped_flutter(pen, comm=None, *, dense_max: int | None = None) -> PencilFlu
     if n > limit:
         raise ProblemError(f"damped flutter with {n} retained DOFs is past the dense limit of {limit} "
                            "(limits.FLUTTER_DENSE_MAX, or flutter_dense_max): the damped flutter search at scale "
-                           "(SLEPc PEP) is not supported yet (docs/damping.md)")
+                           "is :func:`meicp.contact.damped_search.search_damped_flutter` (docs/damping.md)")
     A, B, D = _dense(pen)  # collective when the pencil is distributed
     return on_root(mpi_comm(comm), lambda: classify_spectrum(quadratic_spectrum(A, B, D)))
 

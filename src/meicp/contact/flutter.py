@@ -37,9 +37,10 @@ from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import mat_from_scipy
 from .damped import damped_flutter
+from .damped_search import search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import FlutterGrowth, combine_growths, search_growth
-from .flutter_proxy import PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, proxy_targets
+from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, off_cluster, proxy_targets
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
 from .lines import BASE, ContactState
 from .on_root import on_root
@@ -57,13 +58,6 @@ SEARCH_NEV = 4
 SEARCH_NCV = 16
 #: a σ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
-#: a target whose pairs all fail the residual gate sits inside a cluster of ill-conditioned
-#: flutter eigenvalues (shift-and-invert then returns pseudo-pairs next to it); it is moved up
-#: off the cluster by OFF_CLUSTER·max(Im τ, 0.05|τ|) per try, at most OFF_CLUSTER_TRIES times:
-#: one such move certified the cluster's top edge where it was measured
-#: (docs/benchmarks-notes.md, "OFF_CLUSTER")
-OFF_CLUSTER = 0.5
-OFF_CLUSTER_TRIES = 1
 OFF_CLUSTER_NCV = 16
 #: an interface-strip proxy's target at that size is searched where it is, for one eigenpair
 #: with a basis of INTERFACE_NCV: on the seeds' scene (extensive_interface.toml) coarsened to
@@ -94,13 +88,6 @@ def lambda_line_targets(growth: float, frequencies) -> list[complex]:
     """Targets σ = (g + iω)² on the vertical line Re λ = g of the λ-plane: a sweep that needs
     no proxy (the large-scale path without one, and the benchmark's independent check)."""
     return [complex((growth + 1j * w) ** 2) for w in frequencies]
-
-
-def off_cluster(tau: complex, attempt: int) -> complex:
-    """The target tried after ``attempt`` + 1 failed ones at ``tau``: moved up, away from the
-    real axis, by OFF_CLUSTER·max(Im τ, 0.05|τ|)·2^attempt (the fastest flutter modes of a
-    cluster are those of largest Im σ, on its top edge)."""
-    return tau + 1j * OFF_CLUSTER * max(tau.imag, 0.05 * abs(tau)) * 2 ** attempt
 
 
 def _real_part_bound(ops: SlidingPencilOps, given: tuple | None) -> tuple[float | None, str]:
@@ -241,9 +228,15 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     if n == 0:
         return PencilFlutter(False, evidence="every DOF is held: nothing can move (a proof)", complete=True,
                              growth=NO_FLUTTER)
-    if pen.damped:  # the quadratic pencil: dense only so far (ProblemError past dense_max)
-        return damped_flutter(pen, comm, dense_max=dense_max)
-    if n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max):
+    dense = n <= (limits.FLUTTER_DENSE_MAX if dense_max is None else dense_max)
+    if pen.damped:  # the quadratic pencil: its dense companion QZ, or the search at scale
+        if dense:
+            return damped_flutter(pen, comm, dense_max=dense_max)
+        search.pop("real_bound", None)  # the undamped pencil's Re σ bound says nothing of λ here
+        if n >= limits.FLUTTER_SEARCH_LARGE:
+            search = {"tol": LARGE_EPS_TOL, "strict_tol": STRICT_EPS_TOL, "low_rank": LOW_RANK_TOL, **search}
+        return search_damped_flutter(pen, scene, comm, targets=targets, options=options, **search)
+    if dense:
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
         return on_root(comm, lambda: dense_flutter(A, B))
     need = limits.FLUTTER_SEARCH_BYTES_PER_DOF * n

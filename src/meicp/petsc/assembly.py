@@ -126,6 +126,12 @@ class LatticeMatrices:
         are dense and small (docs/damping.md); assembled at each call, not kept."""
         return damping_matrix_scipy(self.model)
 
+    def damping_in_layout(self):
+        """C in K's layout: SciPy CSR when serial, PETSc AIJ on the row bands when distributed
+        (the damped flutter search at scale); assembled at each call, the caller destroys a
+        PETSc one.  Collective when distributed."""
+        return assemble_damping(self.model, self.comm)
+
     def destroy(self) -> None:
         """Free the PETSc matrices (collective); nothing to do for SciPy ones."""
         if self.distributed:

@@ -295,24 +295,8 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 K.setUp()
                 eps.setOperators(K)
             scope.configure(eps)  # setFromOptions, last
-            eps.solve()
-        pairs, info = _converged_pairs(eps, ops, tau, real_form, B2)
-        info["solves"] = 1
-        if (gate is not None and strict_tol is not None and strict_tol < eps.getTolerances()[0] and pairs
-                and not any(res <= gate for _, _, res in pairs)):
-            # the eigenvectors converged (real and imaginary parts) start the stricter solve;
-            # copied only here, where they are needed (each is a vector of the 2n form)
-            for i in range(eps.getConverged()):
-                zr, zi = B2.createVecRight(), B2.createVecRight()
-                eps.getEigenvector(i, zr, zi)
-                vectors += [zr, zi]
-            eps.setTolerances(tol=strict_tol)
-            eps.setInitialSpace(vectors)
-            eps.solve()
-            iterations = info["iterations"]
-            pairs, info = _converged_pairs(eps, ops, tau, real_form, B2)
-            info["iterations"] += iterations
-            info["solves"] = 2
+            pairs, info = solve_tightened(eps, lambda: _converged_pairs(eps, ops, tau, real_form, B2), B2, gate,
+                                          strict_tol, vectors)
         info["seconds"] = time.perf_counter() - t0
         return pairs, info
     finally:
@@ -321,23 +305,62 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 obj.destroy()
 
 
+def solve_tightened(eps, collect, template, gate: float | None, strict_tol: float | None,
+                    vectors: list) -> tuple[list, dict]:
+    """``eps.solve()`` and ``collect()`` → ``(pairs, info)`` (pairs: (value, x, backward error));
+    when no pair converged at the EPS tolerance has a backward error ≤ ``gate``, the same
+    operator is solved again at ``strict_tol``, started from the eigenvectors converged
+    (copied into ``vectors``, the caller's to destroy; ``template``: a Mat whose right
+    vectors are the EPS's).  info ``solves``: how many were made.  Collective."""
+    eps.solve()
+    pairs, info = collect()
+    info["solves"] = 1
+    if (gate is not None and strict_tol is not None and strict_tol < eps.getTolerances()[0] and pairs
+            and not any(res <= gate for _, _, res in pairs)):
+        # the eigenvectors converged (real and imaginary parts) start the stricter solve;
+        # copied only here, where they are needed (each is a vector of the real form)
+        for i in range(eps.getConverged()):
+            zr, zi = template.createVecRight(), template.createVecRight()
+            eps.getEigenvector(i, zr, zi)
+            vectors += [zr, zi]
+        eps.setTolerances(tol=strict_tol)
+        eps.setInitialSpace(vectors)
+        eps.solve()
+        iterations = info["iterations"]
+        pairs, info = collect()
+        info["iterations"] += iterations
+        info["solves"] = 2
+    return pairs, info
+
+
 def _converged_pairs(eps, ops: SlidingPencilOps, tau: complex, real_form: bool, B2) -> tuple[list, dict]:
     """The converged pairs of a shift-and-invert EPS on the 2n form, back on (A, B) (see
     :func:`complex_shift_solve`), and its info."""
+    info = {"factor": "real 2n" if real_form else "complex"}
+    return converged_pairs(eps, B2, tau, inverted=not real_form, residual=ops.residual, gather=ops.gather,
+                           comm=mpi_comm(ops.A.getComm()), info=info)
+
+
+def converged_pairs(eps, template, tau: complex, *, inverted: bool, residual, gather, comm,
+                    head: int | None = None, info: dict | None = None) -> tuple[list, dict]:
+    """The converged pairs of a shift-and-invert EPS on the real form of a complex operator
+    whose eigenvalues are ``1/(value − τ)`` (``inverted``) or ``value − τ`` (the real 2n
+    form's pencil), and ``info`` with {``nconv``, ``iterations``, ``radius``: the largest
+    |value − τ| converged}.  Pairs: (value with Im ≥ 0, x gathered on every rank, its
+    ``residual``); ``head``: x is the first ``head`` local entries of each complex vector (the
+    companion form's x of [x; λx]), None: all.  ``template``: a Mat whose right vectors are
+    the EPS's.  Collective."""
     nconv = eps.getConverged()
-    info = {"nconv": nconv, "iterations": eps.getIterationNumber(),
-            "factor": "real 2n" if real_form else "complex"}
-    zr, zi = B2.createVecRight(), B2.createVecRight()
+    info = {**(info or {}), "nconv": nconv, "iterations": eps.getIterationNumber()}
+    zr, zi = template.createVecRight(), template.createVecRight()
     pairs, seen, radius = [], [], 0.0
-    comm = mpi_comm(ops.A.getComm())
     previous = None
     for i in range(nconv):
         theta = complex(eps.getEigenvalue(i))
-        # the complex factor's operator has the eigenvalues 1/(σ − τ), 1/(σ − τ̄)
-        mu = theta if real_form else (1.0 / theta if theta != 0 else complex(np.inf))
+        mu = (1.0 / theta if theta != 0 else complex(np.inf)) if inverted else theta
         radius = max(radius, abs(mu))
         # SLEPc returns a real form's complex eigenvalues as conjugate pairs, one after the
-        # other; the second (eigenvector z̄) maps to the same σ as the first
+        # other; the second (eigenvector z̄) maps to the same value as the first
         if previous is not None and mu.imag != 0 and mu == previous.conjugate():
             previous = None
             continue
@@ -345,16 +368,18 @@ def _converged_pairs(eps, ops: SlidingPencilOps, tau: complex, real_form: bool, 
         eps.getEigenvector(i, zr, zi)
         z = zr.getArray(readonly=True) + 1j * zi.getArray(readonly=True)
         x_plus, x_minus = z[0::2] + 1j * z[1::2], z[0::2] - 1j * z[1::2]
+        if head is not None:
+            x_plus, x_minus = x_plus[:head], x_minus[:head]
         norms = [float(np.vdot(x, x).real) for x in (x_plus, x_minus)]
         if comm is not None:
             norms = [comm.allreduce(v) for v in norms]
-        sigma, x = (tau + mu, x_plus) if norms[0] >= norms[1] else (tau.conjugate() + mu, x_minus)
-        if sigma.imag < 0:
-            sigma, x = sigma.conjugate(), x.conj()
-        if any(abs(sigma - s) <= 1e-10 * max(1.0, abs(s)) for s in seen):
+        value, x = (tau + mu, x_plus) if norms[0] >= norms[1] else (tau.conjugate() + mu, x_minus)
+        if value.imag < 0:
+            value, x = value.conjugate(), x.conj()
+        if any(abs(value - s) <= 1e-10 * max(1.0, abs(s)) for s in seen):
             continue  # the other member of a conjugate pair
-        seen.append(sigma)
-        pairs.append((sigma, ops.gather(x), ops.residual(sigma, x)))
+        seen.append(value)
+        pairs.append((value, gather(x), residual(value, x)))
     info["radius"] = radius
     zr.destroy()
     zi.destroy()

@@ -22,13 +22,8 @@ def reduced_pencil(K, M, P, Q, retained: np.ndarray, P_B=None):
     P_B = P if P_B is None else P_B
     if not is_petsc_mat(K):
         return -(P @ K @ Q).tocsr(), (P_B @ M @ Q).tocsr()
-    comm = K.getComm()
-    lo, hi = K.getOwnershipRange()
-    r_lo, r_hi = np.searchsorted(retained, [lo, hi])
-    n, r = K.getSize()[0], retained.size
-    Qm = mat_from_rows(comm, Q[lo:hi], (n, r), int(r_hi - r_lo))
-    Pm = mat_from_rows(comm, P[r_lo:r_hi], (r, n), hi - lo)
-    PBm = Pm if P_B is P else mat_from_rows(comm, P_B[r_lo:r_hi], (r, n), hi - lo)
+    Qm, Pm = _maps_on_bands(K, P, Q, retained)
+    PBm = Pm if P_B is P else _maps_on_bands(K, P_B, None, retained)[1]
     try:
         KQ, MQ = K.matMult(Qm), M.matMult(Qm)
         A, B = Pm.matMult(KQ), PBm.matMult(MQ)
@@ -41,3 +36,31 @@ def reduced_pencil(K, M, P, Q, retained: np.ndarray, P_B=None):
         if PBm is not Pm:
             PBm.destroy()
     return A, B
+
+
+def reduced_matrix(C, P, Q, retained: np.ndarray):
+    """``P C Q`` in the pencil's layout (as :func:`reduced_pencil` lays out A and B): SciPy CSR
+    when C is SciPy, else a PETSc Mat the caller destroys (collective)."""
+    if not is_petsc_mat(C):
+        return (P @ C @ Q).tocsr()
+    Qm, Pm = _maps_on_bands(C, P, Q, retained)
+    try:
+        CQ = C.matMult(Qm)
+        try:
+            return Pm.matMult(CQ)
+        finally:
+            CQ.destroy()
+    finally:
+        Qm.destroy()
+        Pm.destroy()
+
+
+def _maps_on_bands(K, P, Q, retained: np.ndarray):
+    """``(Q, P)`` as PETSc Mats on the row bands of the distributed K (Q None: not made): Q gets
+    K's row bands, P the rows of the reduced DOFs each rank owns.  Collective."""
+    comm = K.getComm()
+    lo, hi = K.getOwnershipRange()
+    r_lo, r_hi = np.searchsorted(retained, [lo, hi])
+    n, r = K.getSize()[0], retained.size
+    Qm = None if Q is None else mat_from_rows(comm, Q[lo:hi], (n, r), int(r_hi - r_lo))
+    return Qm, mat_from_rows(comm, P[r_lo:r_hi], (r, n), hi - lo)

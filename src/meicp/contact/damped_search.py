@@ -1,0 +1,169 @@
+"""The damped flutter search past the dense limit (docs/damping.md, "damped flutter at scale"):
+complex shift-and-invert on the companion form of the quadratic sliding pencil
+``Q(λ) = λ²B + λD − A`` (:mod:`meicp.petsc.flutter_quadratic`) at targets λ₀ from the damped
+contact-strip proxy (:func:`~.flutter_proxy.proxy_targets`, σ = λ₀²), else on the line
+Re λ = 0.05.
+
+A pair counts as a flutter mode when its backward error on Q is at most
+:data:`~.flutter_verdict.RESIDUAL_TOL` and both Re λ and |Im λ| exceed the margin
+``MARGIN·η·(|λ|²‖B‖ + |λ|‖D‖ + ‖A‖)/(2|λ|‖B‖ + ‖D‖)`` — the first-order change of λ under a
+backward error η (‖Q'(λ)‖ ≈ 2|λ|‖B‖ + ‖D‖), with the undamped search's :data:`~.flutter.MARGIN`
+standing for the unknown condition number (with D = 0 it is that search's σ-margin over 2|λ|).
+Like the undamped search it proves flutter, never its absence, and bounds the growth from
+below only (no Bendixson rectangle for the quadratic pencil yet).  Collective.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ..core import limits
+from ..core.comm import available_memory_on, mpi_comm
+from ..core.matrix import is_petsc_mat
+from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
+from ..petsc.mat import mat_from_scipy
+from ..petsc.pencil import reduced_matrix
+from .flutter_dense import _fastest_first, _normalise
+from .flutter_growth import FlutterGrowth, search_growth
+from .lines import BASE
+from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, off_cluster, proxy_targets
+from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
+
+log = logging.getLogger("meicp")
+
+#: the unknown condition number the margins stand for (the undamped search's)
+MARGIN = 1e6
+#: eigenpairs per target and the Krylov basis (complex; SLEPc's real form has twice both): at
+#: 10⁶ DOFs a basis of 24 for one pair cost the same
+#: (docs/benchmarks-notes.md, "damped flutter search")
+SEARCH_NEV = 2
+SEARCH_NCV = 12
+#: the λ-line searched when the scene has no proxy: Re λ = LINE_GROWTH, ω = LINE_FREQUENCIES
+LINE_GROWTH = 0.05
+LINE_FREQUENCIES = (0.5, 1.5, 2.5)
+#: a λ within this relative distance of an earlier one is the same eigenvalue
+SAME = 1e-9
+
+
+def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float) -> float:
+    """How far λ may be from the exact eigenvalue (module docstring)."""
+    _, norm_B, norm_D = ops.norms
+    return MARGIN * residual * ops.scale(lam) / max(2 * abs(lam) * norm_B + norm_D, np.finfo(float).tiny)
+
+
+def moved_off(lam0: complex, attempt: int) -> complex:
+    """λ₀ moved up off a cluster as the undamped search moves σ (:func:`~.flutter_proxy.off_cluster`
+    of σ₀ = λ₀²)."""
+    return complex(np.sqrt(off_cluster(complex(lam0) ** 2, attempt)))
+
+
+def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
+    """``(λ₀ targets, why)`` for a pencil of ``n`` retained DOFs: the damped proxy's fastest
+    flutter modes (λ = √σ) — a base proxy's moved up off its cluster first from
+    ``limits.FLUTTER_OFF_CLUSTER_FROM`` DOFs, as the undamped search does — else the λ-line."""
+    sigmas = proxy_targets(scene, lines, 1 if n >= limits.FLUTTER_SEARCH_LARGE else 3)
+    if sigmas:
+        targets = [complex(np.sqrt(complex(s))) for s in sigmas]
+        why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy (dense companion QZ)"
+        if n >= limits.FLUTTER_OFF_CLUSTER_FROM and any(line.name == BASE for line in lines):
+            moved = [moved_off(t, 0) for t in targets]
+            why += (", each moved up off its cluster before the first solve: "
+                    + ", ".join(f"{t:.4g} → {m:.4g}" for t, m in zip(targets, moved)))
+            targets = moved
+        return targets, why
+    return ([complex(LINE_GROWTH, w) for w in LINE_FREQUENCIES],
+            f" on the λ-line Re λ = {LINE_GROWTH:g}, ω = " + ", ".join(f"{w:g}" for w in LINE_FREQUENCIES)
+            + " (no proxy for this scene)")
+
+
+def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEARCH_NEV,
+                          ncv: int | None = SEARCH_NCV, tol: float = 1e-12, low_rank: float | None = None,
+                          strict_tol: float | None = None, options: dict | None = None) -> PencilFlutter:
+    """Damped flutter modes of the (distributed or SciPy) sliding pencil ``pen`` near the
+    complex λ-``targets`` (default: :func:`damped_targets`): True with certified modes, else
+    None — never a proof of absence.  Collective."""
+    comm = mpi_comm(comm)
+    n = int(pen.maps.retained.size)
+    need = 2 * limits.FLUTTER_SEARCH_BYTES_PER_DOF * n  # the companion form: twice the basis
+    memory, where = available_memory_on(comm, need)
+    if memory is not None and need > memory:
+        return PencilFlutter(None, evidence=(
+            f"not searched: the damped flutter search of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "
+            f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"),
+            growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
+    why = ""
+    if targets is None:
+        targets, why = damped_targets(scene, pen.lines, n)
+    lattice = pen.lattice
+    C = lattice.damping_in_layout()
+    D = None
+    try:
+        D = reduced_matrix(C, pen.maps.P, pen.maps.Q, pen.maps.retained)
+        return _search(pen, D, targets, why, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank, strict_tol=strict_tol,
+                       options=options)
+    finally:
+        for M in (C, D):
+            if is_petsc_mat(M):
+                M.destroy()
+
+
+def _search(pen, D, targets, why: str, **solve) -> PencilFlutter:
+    A, B = pen.A, pen.B
+    own = not is_petsc_mat(A)
+    if own:  # a serial SciPy pencil: PETSc Mats of its own for the search
+        A, B, D = (mat_from_scipy(pen.comm, M) for M in (A, B, D))
+    try:
+        with QuadraticPencilOps(A, B, D) as ops:
+            return _at_targets(ops, targets, why, **solve)
+    finally:
+        if own:
+            for M in (A, B, D):
+                M.destroy()
+
+
+def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFlutter:
+    modes, rejected, disks, borderline, moved = [], [], [], 0, []
+    for lam0 in targets:
+        lam0 = complex(lam0)
+        lam0 = lam0.conjugate() if lam0.imag < 0 else lam0
+        for attempt in range(OFF_CLUSTER_TRIES + 1):
+            pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL, **solve)
+            passed = sum(res <= RESIDUAL_TOL for _, _, res in pairs)
+            disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"]))
+            for lam, x, res in pairs:
+                r = lambda_margin(ops, lam, res)
+                if res > RESIDUAL_TOL:
+                    rejected.append(RejectedPair(lam * lam, res))
+                elif lam.imag > r and lam.real > r:
+                    if not any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):
+                        modes.append(FlutterCandidate(lam * lam, _normalise(x), res, 2 * abs(lam) * r + r * r,
+                                                      f"companion shift-invert at λ₀ = {lam0:.6g}"))
+                elif lam.imag != 0 and lam.real > -r:
+                    borderline += 1
+            log.info("damped flutter: %d pair(s) near λ₀ = %s, %d passing the residual gate (%d restarts)",
+                     len(pairs), f"{lam0:.6g}", passed, info["iterations"])
+            # pseudo-pairs, or none converged: a target inside a cluster of ill-conditioned
+            # eigenvalues (as in the undamped search); moved up off it
+            if passed or attempt == OFF_CLUSTER_TRIES:
+                break
+            moved.append((lam0, moved_off(lam0, attempt)))
+            lam0 = moved[-1][1]
+    counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved)}
+    text = "; ".join(f"|λ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} λ, {p} passing the residual gate, "
+                     f"{it} restarts)" for t, r, k, p, it in disks)
+    off = "".join(f"; no pair near λ₀ = {a:.4g} passed the residual gate, so the target moved off its cluster to "
+                  f"{b:.4g}" for a, b in moved)
+    evidence = (f"damped: complex shift-and-invert on the companion form of λ²B + λD − A at {len(disks)} target(s)"
+                f"{why}{off}: the eigenvalues SLEPc converged in {text}"
+                + (f"; {len(rejected)} pair(s) failed the residual gate {RESIDUAL_TOL:g}" if rejected else ""))
+    if modes:
+        evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
+                     "is not (not a proof of the growth rate)")
+    else:
+        evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
+    growth = search_growth(modes, "the damped search computes only the eigenvalues near its targets "
+                                  "(no bound on the whole quadratic spectrum yet)")
+    return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,
+                         growth=growth)
