@@ -17,12 +17,13 @@ undecided verdict leaves a gap.  The grid's first μ with certified flutter is a
 threshold, not a proved onset (the damped critical friction is not built).
 
 ``scale``: the damped verdict at 10⁶ DOFs on ``--ranks`` ranks (issue 31, deliverable 5): each
-shipped 10⁶-DOF scene file of ``--scenes`` with viscosity ``--eta`` in every layer (written
-to a temporary directory), ``meicp solve --json`` on it and, side by side under the same
+shipped 10⁶-DOF scene file of ``--scenes`` (``stem@μ``: at friction μ) with viscosity
+``--eta`` in every layer and its ``[solver]`` table left out (written to a temporary directory), ``meicp solve --json`` on it and, side by side under the same
 lock, one SLEPc eigen-solve of the *undamped* pencil of the same lattice
-(``bench_scenes.py eigensolve``) — the issue's reference.  The damped divergence is
-undecided past the dense enumeration (its scalable path is not built); the row says what the
-damped flutter search at scale (docs/damping.md) found and what it cost.
+(``bench_scenes.py eigensolve``) — the issue's reference.  Past the dense enumeration the
+damped divergence is the damped Rayleigh bound's (a proof) or undecided (no search for its
+modes at scale yet); the row says that, what the damped flutter search at scale
+(docs/damping.md) found, and what it cost.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ import meicp
 from meicp.examples import two_layer_scene
 from meicp.io.scene import scene_from_dict
 
-SCALE_FIELDS = ["scene", "eta", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "flutter",
+SCALE_FIELDS = ["scene", "eta", "friction", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "divergence_test", "flutter",
                 "flutter_lower", "modes", "solve_s", "flutter_s", "static_s", "eigensolve_s", "ratio", "flutter_ratio",
                 "peak_mb", "load1", "date", "commit", "flutter_evidence"]
 FIELDS = ["scene", "eta", "mu", "divergence", "divergence_growth", "flutter", "flutter_lower", "flutter_upper",
@@ -138,9 +139,12 @@ def scale(args) -> None:
         for stem in args.scenes:
             # the damped divergence is decided by its own path: a scene's [solver] method (e.g.
             # "active-set") is not one of its methods and is left out
+            stem, _, mu = stem.partition("@")  # "scene@μ": every contact line at friction μ
             data = meicp.load_scene(ROOT / "data" / "scenes" / f"{stem}.toml").to_dict()
             data.pop("solver", None)
             scene = with_viscosity(scene_from_dict(data), (args.eta,) * 99)
+            if mu:
+                scene = scene.with_friction(float(mu))
             damped = Path(tmp) / f"{stem}_damped.toml"
             damped.write_text(scene_to_toml(scene))
             with bs._Lock(args.lock):  # the two commands side by side, nothing heavy between
@@ -155,11 +159,12 @@ def scale(args) -> None:
             timings = doc.get("timings", {})
             growth = doc.get("flutter_growth") or {}
             seconds = eig.get("seconds")
-            row = {"scene": f"{stem}.toml", "eta": args.eta, "dofs": 2 * scene.nx * scene.ny,
+            row = {"scene": f"{stem}.toml", "eta": args.eta, "friction": mu, "dofs": 2 * scene.nx * scene.ny,
                    "retained": doc.get("sizes", {}).get("retained", ""),
                    "contacts": doc.get("sizes", {}).get("complementarity", ""), "ranks": args.ranks,
                    "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
                    "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
+                   "divergence_test": ((doc.get("proofs") or [{}])[0] or {}).get("test", ""),
                    "flutter_lower": growth.get("lower", ""), "modes": len(doc.get("flutter_modes") or []),
                    "solve_s": f"{solve_s:.2f}", "flutter_s": f"{timings.get('flutter', float('nan')):.2f}",
                    "static_s": f"{timings.get('static', 0.0):.2f}",
@@ -181,7 +186,7 @@ def scale_chart(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    latest = {r["scene"]: r for r in read_rows(csv_path("damping_scale"))}
+    latest = {(r["scene"], r["friction"]): r for r in read_rows(csv_path("damping_scale"))}
     rows = list(latest.values())
     fig, ax = plt.subplots(figsize=(7, 0.9 + 0.8 * len(rows)))
     for k, r in enumerate(rows):
@@ -192,12 +197,16 @@ def scale_chart(args) -> None:
         ax.barh(k, total - static - flutter, left=static + flutter, color="tab:blue",
                 label="the rest (assembly, reduction, output)" if k == 0 else None)
         ax.plot([5 * eig], [k], "k|", ms=22, label="5 × one undamped eigen-solve" if k == 0 else None)
-        ax.text(total, k, f"  {total:.0f} s = {total / eig:.1f}× eigen-solve ({r['verdict']}, "
-                          f"flutter growth ≥ {float(r['flutter_lower'] or 0):.3g})", va="center", fontsize=7)
-    ax.set_yticks(range(len(rows)), [f"{r['scene']}\nη = {r['eta']}, {int(r['dofs']):,} DOFs, {r['ranks']} ranks"
+        found = (f"flutter growth ≥ {float(r['flutter_lower']):.3g}" if r["flutter"] == "True"
+                 else f"flutter {r['flutter'] or 'undecided'}")
+        ax.text(total, k, f"  {total:.0f} s = {total / eig:.1f}× eigen-solve ({r['verdict']}: divergence "
+                          f"{ {'True': 'found', 'False': 'proved absent'}.get(r['divergence'], 'undecided')}, {found})",
+                va="center", fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{r['scene']}" + (f" at μ = {r['friction']}" if r["friction"] else "")
+                                     + f"\nη = {r['eta']}, {int(r['dofs']):,} DOFs, {r['ranks']} ranks"
                                      for r in rows], fontsize=7)
     ax.set_xlabel("wall seconds (meicp solve)")
-    ax.set_title("Damped verdict at scale: damped flutter search (divergence undecided: not built)", fontsize=9)
+    ax.set_title("Damped verdict at scale: damped Rayleigh bound and flutter search", fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
     ax.set_xlim(0, 1.6 * max(float(r["solve_s"]) for r in rows))
     save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
@@ -212,7 +221,9 @@ def main() -> None:
     r.add_argument("--points", type=int, default=60)
     sub.add_parser("chart")
     c = sub.add_parser("scale")
-    c.add_argument("--scenes", nargs="+", default=["extensive_interface"], help="shipped scene file stems")
+    c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact",
+                                                      "extensive_contact@0.05"],
+                   help="shipped scene file stems, each optionally @μ (every contact line at friction μ)")
     c.add_argument("--eta", type=float, default=0.02, help="viscosity of every layer")
     c.add_argument("--ranks", type=int, default=2)
     c.add_argument("--lock", help="flock this file around both commands")

@@ -74,9 +74,67 @@ def test_a_target_far_from_every_eigenvalue_proves_nothing():
 
 
 def test_a_damped_scene_past_every_dense_limit_is_unstable_by_its_flutter(monkeypatch):
-    """Past the enumeration's limits the damped divergence is undecided (its scalable path is
-    not built), and the search's certified flutter mode still decides the verdict."""
+    """Past the enumeration's limits the damped divergence is undecided where the damped
+    Rayleigh bound proves nothing (no search for its modes at scale yet), and the search's
+    certified flutter mode still decides the verdict."""
     monkeypatch.setattr(limits, "ENUMERATE_N", 10)
     r = meicp.analyze(SCENES["base"], flutter_dense_max=10)
-    assert r.divergence is None and "not built yet" in r.evidence
+    assert r.divergence is None and "no search for damped divergence modes at scale" in r.evidence
     assert r.flutter is True and r.stable is False and r.status == "solved"
+
+
+# ------------------------------------------------------------------ the damped Rayleigh bound
+
+
+def _slipping(mu, eta=(0.05, 0.02), states="slip+"):
+    return damped(two_layer_scene(6, (2, 2), mu=mu, states=states), eta=eta)
+
+
+@pytest.mark.parametrize("states", ["slip+", "slip-"])
+def test_the_friction_shift_bounds_sym_d_from_below(states):
+    """sym(D) + ν·B ⪰ 0 with the ν of the Gershgorin discs (dense eigenvalues), at several μ."""
+    import scipy.linalg as sl
+
+    from meicp.contact.damped_rayleigh import friction_shift
+    from meicp.lattice.assembly import mass_matrix_scipy
+
+    indefinite = []
+    for mu in (0.1, 1.0, 5.0, 20.0):
+        with pencil(_slipping(mu, states=states)) as pen:
+            nu, why = friction_shift(pen.maps, pen.lattice.damping(), mass_matrix_scipy(pen.lattice.model))
+            D = damping_matrix(pen).toarray()
+            B = pen.B.toarray()
+        assert nu is not None and "Gershgorin" in why
+        lowest = sl.eigvalsh(0.5 * (D + D.T) + nu * B, B)[0]
+        assert lowest >= -1e-12
+        indefinite.append(sl.eigvalsh(0.5 * (D + D.T), B)[0] < 0)
+    # and it is not vacuous: at large μ sym(D) itself is indefinite (the friction rows)
+    assert any(indefinite)
+
+
+def test_the_damped_rayleigh_bound_never_contradicts_the_enumeration(monkeypatch):
+    """Where the bound proves "no λ ≥ 0" the enumeration of every support finds no damped
+    divergence mode; where the enumeration finds one the bound proves nothing."""
+    from meicp.contact.damped_rayleigh import damped_rayleigh_bound
+
+    proved = found = 0
+    for mu in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0, 5.0):
+        for states in ("slip+", "slip-"):
+            scene = _slipping(mu, states=states)
+            with pencil(scene) as pen:
+                ok, statement = damped_rayleigh_bound(pen)
+            exact = meicp.analyze(scene, flutter=False)  # enumeration (small)
+            assert exact.divergence is not None
+            if ok:
+                proved += 1
+                assert exact.divergence is False, (mu, states, statement)
+                assert "a proof" in statement
+            found += exact.divergence is True
+    assert proved >= 2 and found >= 2  # both branches are exercised
+
+    # past the enumeration's limits the verdict is the bound's (or undecided), never "stable" by default
+    monkeypatch.setattr(limits, "ENUMERATE_N", 10)
+    r = meicp.analyze(_slipping(0.05), flutter=False)
+    assert r.divergence is False and r.proofs[0].test == "damped-rayleigh"
+    r = meicp.analyze(_slipping(5.0), flutter=False)
+    assert r.divergence is None and "no search for damped divergence modes at scale" in r.evidence

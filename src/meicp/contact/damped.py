@@ -17,10 +17,11 @@ With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``),
   Re λ < −r decays and one within r of the real axis whose disk meets no other's is real;
   anything else is borderline (undecided).
 
-The divergence runs only where the enumeration's limits allow; past them it is *undecided*
-(the scalable damped divergence path is not built yet), so that the damped flutter search at
-scale (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX`` retained DOFs) can still prove the
-lattice unstable.  Every other path that would leave C out (the modal analysis, the critical
+The divergence is enumerated where the enumeration's limits allow; past them the damped
+Rayleigh bound (:mod:`.damped_rayleigh`, one LDLᵀ inertia) may prove that no λ ≥ 0 exists,
+and otherwise it is *undecided* (no search for damped divergence modes at scale yet), so
+that the damped flutter search at scale (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX``
+retained DOFs) can still prove the lattice unstable.  Every other path that would leave C out (the modal analysis, the critical
 friction, the window procedure, a named divergence method) is a ProblemError saying so
 (:func:`refuse`), never an undamped answer.
 """
@@ -44,6 +45,7 @@ from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_growth import FlutterGrowth
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
+from .damped_rayleigh import damped_rayleigh_bound
 from .on_root import on_root
 
 log = logging.getLogger("meicp")
@@ -104,8 +106,8 @@ def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) -> DivergenceVerdict:
     """The divergence verdict of a damped pencil: the quadratic MEiCP enumerated (modes with
-    σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Undecided past the
-    enumeration's limits (method ``"auto"``); ProblemError when another method is asked for,
+    σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Past the enumeration's
+    limits (method ``"auto"``) the damped Rayleigh bound, else undecided; ProblemError when another method is asked for,
     or ``"enumerate"`` past its limits.  Collective."""
     red = pen.maps
     r, n_j = int(red.retained.size), int(red.J.size)
@@ -115,13 +117,16 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
     if method == "enumerate":
         check_enumeration_size(n_j, r, options)
     elif not enumeration_is_small(r, n_j):
-        # undecided, not an error: the damped flutter search at scale may still prove the
-        # lattice unstable (a certified flutter mode answers the question)
+        # past the enumeration: the damped Rayleigh bound may prove stability; else undecided,
+        # not an error — the damped flutter search may still prove the lattice unstable
+        proved, statement = damped_rayleigh_bound(pen)
+        log.info("damped divergence: %s", statement)
+        if proved:
+            return DivergenceVerdict([], True, statement, None, DivergenceProof("damped-rayleigh", statement))
         text = (f"undecided: damped divergence with {r} retained DOFs and {n_j} complementarity pairs is past the "
                 f"dense enumeration's limits ({limits.ENUMERATE_N} DOFs, {limits.ENUMERATE_J} pairs, 2^|J|·r³ ≤ "
-                f"{limits.ENUMERATE_FLOPS:g}) and the scalable damped divergence path (searches and proofs of the "
-                "quadratic MEiCP) is not built yet: nothing was proved about λ ≥ 0 (docs/damping.md)")
-        log.info("%s", text)
+                f"{limits.ENUMERATE_FLOPS:g}); {statement}; no search for damped divergence modes at scale is built "
+                "yet (docs/damping.md)")
         return DivergenceVerdict([], None, text, None, DivergenceProof("", text))
     max_j = options.get("max_j") if method == "enumerate" else None
 

@@ -11,7 +11,9 @@ class DivergenceProof:
 
     test: ``"enumerate"`` (or the method asked for by name), ``"rayleigh-inertia"``,
     ``"condensed-pd"``, ``"condensed-windows"``, ``"rayleigh-window+condensed-windows"``,
-    ``"certified-mode"``, ``"all-held"``, or ``""`` when nothing was proved.  statement: the
+    ``"certified-mode"``, ``"all-held"``, the damped lattice's ``"quadratic-enumerate"`` and
+    ``"damped-rayleigh"`` (:mod:`meicp.contact.damped_rayleigh`), or ``""`` when nothing was
+    proved.  statement: the
     sentence saying what was proved (or why not).  supports_visited: supports the search
     (or the enumeration) visited; None when nothing was solved.  The window procedure
     (:func:`~.driver.window_verdict`) also records sigma_window (the σ-interval proved free

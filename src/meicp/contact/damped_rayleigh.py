@@ -1,0 +1,66 @@
+"""The damped Rayleigh bound: a proof at any size that the quadratic MEiCP
+``y = (λ²B + λD − A)x`` has no real λ ≥ 0 (docs/damping.md, "damped divergence at scale").
+
+Complementarity gives ``xᵀy = 0``, so every solution has ``λ²·xᵀBx + λ·xᵀDx − xᵀAx = 0``: no
+solution with λ ≥ 0 exists when ``λ²·sym(B) + λ·sym(D) − sym(A) ≻ 0`` for every λ ≥ 0.  The
+undamped bound (sym(A) ≺ 0) does not carry over as it stands, since the friction rows of
+P̃ make sym(D) indefinite although C ⪰ 0 (issue 31).  Split them off:
+``D = P̃CQ̃ = Q̃ᵀCQ̃ + F`` with ``F = diag(μ)P̃₁CQ̃`` (P̃₀ = Q̃ᵀ), where ``Q̃ᵀCQ̃ ⪰ 0``.  With B = diag(b)
+positive and ν ≥ the largest Gershgorin radius of ``diag(b)^-½·sym(F)·diag(b)^-½`` (a pass over
+the |J| friction rows, no factorisation; plus a rounding slack for Q̃ᵀCQ̃),
+``sym(D) ⪰ −ν·B`` and, for every λ ≥ 0,
+
+    λ²B + λ·sym(D) − sym(A) ⪰ (λ² − νλ)·B − sym(A) ⪰ −(ν²/4)·B − sym(A),
+
+so the undamped Rayleigh bound at τ = −ν²/4 (:func:`~.rayleigh.rayleigh_bound`, one LDLᵀ
+inertia with its rounding margin) proves it.  It needs B diagonal (a base contact, an
+interface in centre-of-mass coordinates); otherwise it is not tried.  Collective.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..lattice.assembly import mass_matrix_scipy
+from .rayleigh import rayleigh_bound
+
+#: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
+SLACK = 64
+
+
+def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, str]:
+    """``(ν, why)`` with ``sym(D) ⪰ −ν·B`` (module docstring), or ``(None, why not)`` when B is
+    not diagonal or P̃₀ is not Q̃ᵀ.  SciPy, every rank alike."""
+    Q = sp.csr_matrix(maps.Q)
+    if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
+        return None, "P̃₀ ≠ Q̃ᵀ (the damping's friction-free part is not a congruence)"
+    B = (maps.P @ M @ Q).tocsr()
+    b = B.diagonal()
+    if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
+        return None, "B is not diagonal with positive entries"
+    F = (maps.friction_rows() @ C @ Q).tocsr()
+    S = (0.5 * (F + F.T)).tocsr()
+    scale = 1.0 / np.sqrt(b)
+    S = sp.diags(scale) @ S @ sp.diags(scale)
+    gershgorin = float(np.asarray(abs(S).sum(axis=1)).max()) if S.nnz else 0.0
+    norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
+    slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
+    return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
+                                                 "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+
+
+def damped_rayleigh_bound(pen) -> tuple[bool, str]:
+    """``(proved, statement)``: whether no real λ ≥ 0 solves the damped pencil's quadratic
+    MEiCP, by the bound of the module docstring; the statement says what was shown or why
+    it proves nothing.  Collective on the pencil's communicator."""
+    lattice = pen.lattice
+    nu, why = friction_shift(pen.maps, lattice.damping(), mass_matrix_scipy(lattice.model))
+    if nu is None:
+        return False, f"damped Rayleigh bound not tried: {why}"
+    tau = -0.25 * nu * nu
+    bound = rayleigh_bound(pen.A, pen.B, tau, decisive=False)
+    if bound.proved:
+        return True, (f"damped Rayleigh bound: {why}, and {bound.reason}, so λ²·xᵀBx + λ·xᵀDx − xᵀAx > 0 for every "
+                      "λ ≥ 0 and x ≠ 0: no real λ ≥ 0 (a proof)")
+    return False, f"damped Rayleigh bound at τ = −ν²/4 = {tau:.6g} ({why}): {bound.reason}"
