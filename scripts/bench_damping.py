@@ -150,7 +150,8 @@ def scale(args) -> None:
             with bs._Lock(args.lock):  # the two commands side by side, nothing heavy between
                 load1 = os.getloadavg()[0]
                 out, peaks, wall, timed_out = bs._run(bs._command(args, args.ranks, [
-                    "-m", "meicp", "solve", str(damped), "--no-output", "--json", "-q"]), args.timeout)
+                    "-m", "meicp", "solve", str(damped), "--no-output", "--json", "-q",
+                    *(["--no-flutter"] if args.no_flutter else [])]), args.timeout)
                 eig_out, _, _, _ = bs._run(bs._command(args, args.ranks, [bs.__file__, "eigensolve", str(damped)]),
                                            args.timeout)
             doc = json.loads(out) if out.strip() else {}
@@ -188,17 +189,17 @@ def scale_chart(args) -> None:
 
     latest = {(r["scene"], r["friction"]): r for r in read_rows(csv_path("damping_scale"))}
     rows = list(latest.values())
-    fig, ax = plt.subplots(figsize=(7, 0.9 + 0.8 * len(rows)))
+    fig, ax = plt.subplots(figsize=(10, 1.6 + 0.8 * len(rows)))
     for k, r in enumerate(rows):
         eig = float(r["eigensolve_s"]) if r["eigensolve_s"] else float("nan")
         static, flutter, total = float(r["static_s"]), float(r["flutter_s"]), float(r["solve_s"])
         ax.barh(k, static, color="tab:gray", label="static equilibrium" if k == 0 else None)
         ax.barh(k, flutter, left=static, color="tab:orange", label="damped flutter search" if k == 0 else None)
         ax.barh(k, total - static - flutter, left=static + flutter, color="tab:blue",
-                label="the rest (assembly, reduction, output)" if k == 0 else None)
+                label="the rest (the divergence verdict, assembly, reduction)" if k == 0 else None)
         ax.plot([5 * eig], [k], "k|", ms=22, label="5 × one undamped eigen-solve" if k == 0 else None)
         found = (f"flutter growth ≥ {float(r['flutter_lower']):.3g}" if r["flutter"] == "True"
-                 else f"flutter {r['flutter'] or 'undecided'}")
+                 else "flutter not analysed" if not r["flutter_lower"] else f"flutter {r['flutter'] or 'undecided'}")
         ax.text(total, k, f"  {total:.0f} s = {total / eig:.1f}× eigen-solve ({r['verdict']}: divergence "
                           f"{ {'True': 'found', 'False': 'proved absent'}.get(r['divergence'], 'undecided')}, {found})",
                 va="center", fontsize=7)
@@ -207,8 +208,8 @@ def scale_chart(args) -> None:
                                      for r in rows], fontsize=7)
     ax.set_xlabel("wall seconds (meicp solve)")
     ax.set_title("Damped verdict at scale: damped Rayleigh bound and flutter search", fontsize=9)
-    ax.legend(fontsize=7, loc="lower right")
-    ax.set_xlim(0, 1.6 * max(float(r["solve_s"]) for r in rows))
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2)
+    ax.set_xlim(0, 2.6 * max(float(r["solve_s"]) for r in rows))
     save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
 
 
@@ -221,13 +222,13 @@ def main() -> None:
     r.add_argument("--points", type=int, default=60)
     sub.add_parser("chart")
     c = sub.add_parser("scale")
-    c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact",
-                                                      "extensive_contact@0.05"],
+    c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact"],
                    help="shipped scene file stems, each optionally @μ (every contact line at friction μ)")
     c.add_argument("--eta", type=float, default=0.02, help="viscosity of every layer")
     c.add_argument("--ranks", type=int, default=2)
     c.add_argument("--lock", help="flock this file around both commands")
     c.add_argument("--timeout", type=float, default=1800.0, help="seconds per command")
+    c.add_argument("--no-flutter", action="store_true", help="the divergence verdict only (meicp solve --no-flutter)")
     sub.add_parser("scale_chart")
     args = p.parse_args()
     globals()[args.what](args)

@@ -23,6 +23,7 @@ from meicp.core.matrix import to_dense
 
 from .conftest import ROOT, meicp_cmd, run
 from .helpers import interface_chain_scene
+from .test_damping import damped
 
 SCENES = ROOT / "data" / "scenes"
 
@@ -401,11 +402,17 @@ def test_solve_writes_and_prints_flutter(cli, tmp_path):
 
 
 def test_search_that_would_not_fit_in_memory_is_skipped_and_says_so(monkeypatch):
-    monkeypatch.setattr(fl, "available_memory_on", lambda comm, need=None: (1000, "this machine"))
+    from meicp.contact import flutter_verdict
+
+    monkeypatch.setattr(flutter_verdict, "available_memory_on", lambda comm, need=None: (1000, "this machine"))
     scene = lattice(20, (2, 2), 3.0)
     with pencil(scene) as pen:
         r = fl.pencil_flutter(pen, scene, dense_max=0)
     assert r.flutter is None and not r.modes and r.evidence.startswith("not searched")
+    damped_scene = damped(lattice(20, (2, 2), 3.0), eta=(0.02, 0.02))
+    with pencil(damped_scene) as pen:
+        r = fl.pencil_flutter(pen, damped_scene, dense_max=0)
+    assert r.flutter is None and r.evidence.startswith("not searched: the damped flutter search")
 
 
 def test_no_flutter_flag_takes_no_value():

@@ -20,16 +20,16 @@ import logging
 import numpy as np
 
 from ..core import limits
-from ..core.comm import available_memory_on, mpi_comm
+from ..core.comm import mpi_comm
 from ..core.matrix import is_petsc_mat
 from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
 from ..petsc.mat import mat_from_scipy
 from ..petsc.pencil import reduced_matrix
 from .flutter_dense import _fastest_first, _normalise
-from .flutter_growth import FlutterGrowth, search_growth
+from .flutter_growth import search_growth
 from .lines import BASE
 from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, off_cluster, proxy_targets
-from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
+from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair, memory_refusal
 
 log = logging.getLogger("meicp")
 
@@ -86,13 +86,11 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
     None — never a proof of absence.  Collective."""
     comm = mpi_comm(comm)
     n = int(pen.maps.retained.size)
-    need = 2 * limits.FLUTTER_SEARCH_BYTES_PER_DOF * n  # the companion form: twice the basis
-    memory, where = available_memory_on(comm, need)
-    if memory is not None and need > memory:
-        return PencilFlutter(None, evidence=(
-            f"not searched: the damped flutter search of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "
-            f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"),
-            growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
+    # the companion form: twice the basis
+    refused = memory_refusal(comm, 2 * limits.FLUTTER_SEARCH_BYTES_PER_DOF * n,
+                             f"the damped flutter search of {n:,} retained DOFs")
+    if refused is not None:
+        return refused
     why = ""
     if targets is None:
         targets, why = damped_targets(scene, pen.lines, n)

@@ -31,7 +31,7 @@ import time
 import numpy as np
 
 from ..core import limits
-from ..core.comm import available_memory_on, mpi_comm
+from ..core.comm import mpi_comm
 from ..core.matrix import is_petsc_mat, to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
@@ -39,9 +39,10 @@ from ..petsc.mat import mat_from_scipy
 from .damped import damped_flutter
 from .damped_search import search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
-from .flutter_growth import FlutterGrowth, combine_growths, search_growth
+from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, off_cluster, proxy_targets
-from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair
+from .flutter_verdict import (RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair,
+                             memory_refusal)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
@@ -239,13 +240,10 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     if dense:
         A, B = (to_dense(pen.A), to_dense(pen.B)) if pen.distributed else (pen.A, pen.B)
         return on_root(comm, lambda: dense_flutter(A, B))
-    need = limits.FLUTTER_SEARCH_BYTES_PER_DOF * n
-    memory, where = available_memory_on(comm, need)
-    if memory is not None and need > memory:
-        return PencilFlutter(None, evidence=(
-            f"not searched: the complex shift-and-invert of {n:,} retained DOFs needs about {need / 2**30:.1f} GiB "
-            f"more, {memory / 2**30:.1f} GiB is available on {where}: undecided"),
-            growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
+    refused = memory_refusal(comm, limits.FLUTTER_SEARCH_BYTES_PER_DOF * n,
+                             f"the complex shift-and-invert of {n:,} retained DOFs")
+    if refused is not None:
+        return refused
     why = ""
     if targets is None:
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.comm import available_memory_on
 from .flutter_growth import FlutterGrowth
 
 #: a flutter mode's backward error must be at most this to be reported (the undamped and the
@@ -66,3 +67,14 @@ class FlutterVerdict:
     evidence: str
     seconds: float = 0.0
     growth: FlutterGrowth | None = None
+
+
+def memory_refusal(comm, need: float, what: str) -> PencilFlutter | None:
+    """The undecided analysis of a search that needs ``need`` bytes more than ``comm``'s ranks
+    have (``what``: the search, for the sentence), or None when it fits.  Collective."""
+    memory, where = available_memory_on(comm, need)
+    if memory is None or need <= memory:
+        return None
+    return PencilFlutter(None, evidence=(
+        f"not searched: {what} needs about {need / 2**30:.1f} GiB more, {memory / 2**30:.1f} GiB is available on "
+        f"{where}: undecided"), growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))

@@ -77,7 +77,25 @@ def shift_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_ran
     return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 
-class SlidingPencilOps:
+class PencilWork:
+    """Work vectors (``_work``) of a pencil's operations, freed by :meth:`destroy` or on
+    leaving a ``with`` block — not the pencil's matrices.  Collective."""
+
+    _work: list
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+    def destroy(self) -> None:
+        for v in self._work:
+            v.destroy()
+        self._work = []
+
+
+class SlidingPencilOps(PencilWork):
     """The distributed pencil (A, B) with what every solve needs: ‖A‖₁, ‖B‖₁, this rank's
     rows as SciPy CSR, and work vectors for residuals on (A, B).  Collective; ``destroy``
     (or a ``with`` block) frees the work vectors, not A and B."""
@@ -92,16 +110,9 @@ class SlidingPencilOps:
                       A.createVecLeft()]
         self._parts = False  # not made yet (:meth:`_scaled_parts`)
 
-    def __enter__(self) -> "SlidingPencilOps":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.destroy()
-
     def destroy(self) -> None:
-        for v in self._work:
-            v.destroy()
-        self._work, self._parts = [], False
+        super().destroy()
+        self._parts = False
 
     def residual(self, sigma: complex, x_local: np.ndarray) -> float:
         """Backward error ‖Ax − σBx‖ / ((‖A‖₁ + |σ|‖B‖₁)‖x‖) of (σ, x), x given by this

@@ -28,12 +28,12 @@ import numpy as np
 from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from . import import_petsc, import_slepc, mumps_c
-from .flutter import complex_defaults, converged_pairs, local_csr, solve_tightened
+from .flutter import PencilWork, complex_defaults, converged_pairs, local_csr, solve_tightened
 from .mat import vec_to_numpy
 from .options import FLUTTER, OptionsScope, mumps_controls
 
 
-class QuadraticPencilOps:
+class QuadraticPencilOps(PencilWork):
     """The distributed quadratic pencil (A, B, D) with what every solve needs: the 1-norms,
     this rank's rows as SciPy CSR, complex products and backward errors.  Collective;
     ``destroy`` (or a ``with`` block) frees the work vectors, not the matrices."""
@@ -45,17 +45,6 @@ class QuadraticPencilOps:
         self.A_local, self.B_local, self.D_local = local_csr(A), local_csr(B), local_csr(D)
         self.m = A.getLocalSize()[0]
         self._work = [A.createVecRight(), A.createVecLeft()]
-
-    def __enter__(self) -> "QuadraticPencilOps":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.destroy()
-
-    def destroy(self) -> None:
-        for v in self._work:
-            v.destroy()
-        self._work = []
 
     def times(self, M, x_local: np.ndarray) -> np.ndarray:
         """``M x`` for a complex x (this rank's entries in, this rank's out).  Collective."""
