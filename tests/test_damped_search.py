@@ -138,3 +138,27 @@ def test_the_damped_rayleigh_bound_never_contradicts_the_enumeration(monkeypatch
     assert r.divergence is False and r.proofs[0].test == "damped-rayleigh"
     r = meicp.analyze(_slipping(5.0), flutter=False)
     assert r.divergence is None and "no search for damped divergence modes at scale" in r.evidence
+
+
+def test_the_growth_watch_stops_a_solve_only_where_no_ritz_value_grows():
+    """The damped search's stopping test (a speed heuristic): after its restarts it stops a
+    solve whose last Ritz values all map to Re λ < 0, never one with a growing one, and never
+    before its restarts; a solve that converged or reached its cap ends as SLEPc's would."""
+    from meicp.petsc import import_slepc
+    from meicp.petsc.flutter_quadratic import GrowthWatch
+
+    reason = import_slepc().EPS.ConvergedReason
+    lam0 = complex(0.05, 1.4)
+    decaying = [1.0 / (complex(-0.01, 1.3) - lam0), 1.0 / (complex(-0.2, 1.5) - lam0)]
+    growing = decaying + [1.0 / (complex(0.001, 1.41) - lam0)]
+    watch = GrowthWatch(lam0, restarts=3)
+    for its in (1, 2):  # before its restarts: iterating, whatever the Ritz values
+        watch.monitor(None, its, 0, decaying, [1.0, 1.0])
+        assert watch.stopping(None, its + 1, 500, 0, 2) == reason.ITERATING
+    watch.monitor(None, 3, 0, growing, [1.0] * 3)
+    assert watch.stopping(None, 4, 500, 0, 2) == reason.ITERATING and not watch.gave_up
+    watch.monitor(None, 4, 0, decaying, [1.0, 1.0])
+    assert watch.stopping(None, 5, 500, 0, 2) == reason.DIVERGED_ITS and watch.gave_up
+    other = GrowthWatch(lam0, restarts=3)
+    assert other.stopping(None, 7, 500, 2, 2) == reason.CONVERGED_TOL
+    assert other.stopping(None, 500, 500, 0, 2) == reason.DIVERGED_ITS and not other.gave_up

@@ -101,17 +101,55 @@ class _CompanionInverse:
         out[0::2], out[1::2] = w.real, w.imag
 
 
+class GrowthWatch:
+    """A stopping test: after ``restarts`` Krylov–Schur restarts in which no Ritz value of the
+    operator (θ, λ = λ₀ + 1/θ or λ̄₀ + 1/θ: the same real part) grows (Re λ ≥ 0), the solve ends
+    as if out of iterations — where the damping leaves nothing that grows near the target the
+    search would otherwise run to its cap (more than 6 minutes at 10⁶ DOFs:
+    docs/benchmarks.md, "Damping at scale").  A speed heuristic: the caller counts the solve
+    as not converged, which proves nothing.  Reads the monitor's Ritz values (one restart
+    late); ``gave_up``: whether it stopped the solve.  :meth:`attach` puts it on an EPS."""
+
+    def __init__(self, lam0: complex, restarts: int):
+        self.lam0, self.restarts = complex(lam0), int(restarts)
+        self.seen, self.growing, self.gave_up = -1, True, False
+
+    def attach(self, eps) -> "GrowthWatch":
+        eps.setMonitor(self.monitor)
+        eps.setStoppingTest(self.stopping)
+        return self
+
+    def monitor(self, _eps, its, nconv, eig, err) -> None:
+        theta = np.asarray(eig, dtype=complex)
+        theta = theta[theta != 0]
+        self.seen = its
+        self.growing = bool(theta.size == 0 or np.any(self.lam0.real + (1.0 / theta).real >= 0))
+
+    def stopping(self, _eps, its, max_it, nconv, nev):
+        reason = import_slepc().EPS.ConvergedReason
+        if nconv >= nev:
+            return reason.CONVERGED_TOL
+        if its >= max_it:
+            return reason.DIVERGED_ITS
+        if self.seen == its - 1 >= self.restarts and not self.growing:
+            self.gave_up = True
+            return reason.DIVERGED_ITS
+        return reason.ITERATING
+
+
 def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 2, ncv: int | None = 12,
                           tol: float = 1e-12, low_rank: float | None = None, max_it: int = 500,
                           options: dict | None = None, gate: float | None = None,
-                          strict_tol: float | None = None) -> tuple[list, dict]:
+                          strict_tol: float | None = None, give_up: int | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues λ of Q(λ) = λ²B + λD − A nearest the complex target λ₀ (module
     docstring).  Returns ``(pairs, info)`` as :func:`meicp.petsc.flutter.complex_shift_solve`
     does, with λ in place of σ: pairs = [(λ with Im λ ≥ 0, x gathered on every rank, backward
     error on Q)], info = {``radius`` (the largest |λ − λ₀| converged), ``nconv``,
     ``iterations``, ``seconds``, ``solves``}.  ``gate``, ``strict_tol``, ``low_rank``,
-    ``max_it``, ``options``: as there.  ProblemError when no ZMUMPS of a known version loads
-    (this search has no real-form fallback).  Collective."""
+    ``max_it``, ``options``: as there; ``give_up``: restarts after which a solve whose Ritz
+    values show nothing growing stops (:class:`GrowthWatch`; info ``gave_up``).
+    ProblemError when no ZMUMPS of a known version loads (this search has no real-form
+    fallback).  Collective."""
     PETSc = import_petsc()
     SLEPc = import_slepc()
     entry, why = mumps_c.load("z")
@@ -137,6 +175,7 @@ def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 
             T.setUp()
             eps.setOperators(T)
             scope.configure(eps)  # setFromOptions, last
+            watch = GrowthWatch(lam0, give_up).attach(eps) if give_up is not None else None
 
             def collect():
                 return converged_pairs(eps, T, lam0, inverted=True, residual=ops.residual, gather=ops.gather,
@@ -144,6 +183,7 @@ def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 
 
             pairs, info = solve_tightened(eps, collect, T, gate, strict_tol, vectors)
         info["seconds"] = time.perf_counter() - t0
+        info["gave_up"] = bool(watch is not None and watch.gave_up)
         return pairs, info
     finally:
         for obj in (eps, T, factor, *vectors):
