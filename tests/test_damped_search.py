@@ -151,14 +151,27 @@ def test_the_growth_watch_stops_a_solve_only_where_no_ritz_value_grows():
     lam0 = complex(0.05, 1.4)
     decaying = [1.0 / (complex(-0.01, 1.3) - lam0), 1.0 / (complex(-0.2, 1.5) - lam0)]
     growing = decaying + [1.0 / (complex(0.001, 1.41) - lam0)]
-    watch = GrowthWatch(lam0, restarts=3)
+    watch = GrowthWatch(lam0, restarts=3, budget=1000, tol=1e-8)
     for its in (1, 2):  # before its restarts: iterating, whatever the Ritz values
-        watch.monitor(None, its, 0, decaying, [1.0, 1.0])
+        watch.monitor(None, its, 0, decaying, [1e-2 ** its] * 2)
         assert watch.stopping(None, its + 1, 500, 0, 2) == reason.ITERATING
-    watch.monitor(None, 3, 0, growing, [1.0] * 3)
+    watch.monitor(None, 3, 0, growing, [1e-6] * 3)  # converging fast: only growth decides
     assert watch.stopping(None, 4, 500, 0, 2) == reason.ITERATING and not watch.gave_up
-    watch.monitor(None, 4, 0, decaying, [1.0, 1.0])
+    watch.monitor(None, 4, 0, decaying, [1e-7] * 2)
     assert watch.stopping(None, 5, 500, 0, 2) == reason.DIVERGED_ITS and watch.gave_up
-    other = GrowthWatch(lam0, restarts=3)
+    assert watch.gave_up == "no Ritz value with Re λ ≥ 0"
+    other = GrowthWatch(lam0, restarts=3, budget=1000, tol=1e-8)
     assert other.stopping(None, 7, 500, 2, 2) == reason.CONVERGED_TOL
     assert other.stopping(None, 500, 500, 0, 2) == reason.DIVERGED_ITS and not other.gave_up
+    # growing Ritz values whose estimates stall (0.25 → 0.09 in 8 restarts, as measured at
+    # 10⁶ DOFs) stop at a budget of 60, go on at one they would meet
+    for budget, stops in ((60, True), (1000, False)):
+        slow = GrowthWatch(lam0, restarts=3, budget=budget, tol=1e-8)
+        for its in range(1, 10):
+            slow.monitor(None, its, 0, growing, [0.25 * (0.09 / 0.25) ** ((its - 1) / 8)] * 3)
+        assert (slow.stopping(None, 10, 500, 0, 2) == reason.DIVERGED_ITS) is stops
+        assert ("too slowly" in slow.gave_up) is stops
+    fast = GrowthWatch(lam0, restarts=3, budget=60, tol=1e-8)
+    for its in range(1, 5):  # 100-fold per restart: converging
+        fast.monitor(None, its, 0, growing, [1e-2 ** its] * 3)
+    assert fast.stopping(None, 5, 500, 0, 2) == reason.ITERATING

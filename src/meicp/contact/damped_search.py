@@ -45,10 +45,12 @@ LINE_GROWTH = 0.05
 LINE_FREQUENCIES = (0.5, 1.5, 2.5)
 #: a λ within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
-#: restarts after which a solve whose Ritz values show nothing growing (Re λ < 0) stops
-#: (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`): a speed heuristic, the
-#: target then counts as failed (undecided)
+#: restarts after which a solve stops when its Ritz values show nothing growing (Re λ < 0), or
+#: when its error estimates, falling as they did, would not reach the tolerance within
+#: GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`): a speed
+#: heuristic, the target then counts as failed (undecided)
 GIVE_UP_RESTARTS = 10
+GIVE_UP_BUDGET = 60
 
 
 def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float) -> float:
@@ -131,7 +133,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
         lam0 = complex(lam0)
         lam0 = lam0.conjugate() if lam0.imag < 0 else lam0
         for attempt in range(OFF_CLUSTER_TRIES + 1):
-            pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL, give_up=GIVE_UP_RESTARTS, **solve)
+            pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL, give_up=(GIVE_UP_RESTARTS, GIVE_UP_BUDGET), **solve)
             passed = sum(res <= RESIDUAL_TOL for _, _, res in pairs)
             disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"], info["gave_up"]))
             for lam, x, res in pairs:
@@ -154,7 +156,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
             lam0 = moved[-1][1]
     counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved)}
     text = "; ".join(f"|λ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} λ, {p} passing the residual gate, "
-                     f"{it} restarts" + (", given up: no Ritz value with Re λ ≥ 0" if gave_up else "") + ")"
+                     f"{it} restarts" + (f", given up: {gave_up}" if gave_up else "") + ")"
                      for t, r, k, p, it, gave_up in disks)
     off = "".join(f"; no pair near λ₀ = {a:.4g} passed the residual gate, so the target moved off its cluster to "
                   f"{b:.4g}" for a, b in moved)

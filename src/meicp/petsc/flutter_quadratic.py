@@ -102,17 +102,24 @@ class _CompanionInverse:
 
 
 class GrowthWatch:
-    """A stopping test: after ``restarts`` Krylov–Schur restarts in which no Ritz value of the
-    operator (θ, λ = λ₀ + 1/θ or λ̄₀ + 1/θ: the same real part) grows (Re λ ≥ 0), the solve ends
-    as if out of iterations — where the damping leaves nothing that grows near the target the
-    search would otherwise run to its cap (more than 6 minutes at 10⁶ DOFs:
-    docs/benchmarks.md, "Damping at scale").  A speed heuristic: the caller counts the solve
-    as not converged, which proves nothing.  Reads the monitor's Ritz values (one restart
-    late); ``gave_up``: whether it stopped the solve.  :meth:`attach` puts it on an EPS."""
+    """A stopping test for the damped search, a speed heuristic: after ``restarts``
+    Krylov–Schur restarts the solve ends as if out of iterations when
 
-    def __init__(self, lam0: complex, restarts: int):
-        self.lam0, self.restarts = complex(lam0), int(restarts)
-        self.seen, self.growing, self.gave_up = -1, True, False
+    * no Ritz value of the operator grows (θ, λ = λ₀ + 1/θ or λ̄₀ + 1/θ: the same real part;
+      every Re λ < 0): the damping leaves nothing that grows near the target; or
+    * the best error estimate of the unconverged Ritz values, falling geometrically as it did
+      since the first restart, would not reach ``tol`` within ``budget`` restarts in all.
+
+    Without it a target where nothing converges runs to the cap of 500 restarts (10⁶ DOFs,
+    μ = 0.05: the error estimate 0.25 → 0.09 in 8 restarts, about 10 s each:
+    docs/benchmarks.md, "Damping at scale").  The caller counts a stopped solve as not
+    converged, which proves nothing.  Reads the monitor's Ritz values and estimates (one
+    restart late); ``gave_up``: why it stopped the solve ("" when it did not).
+    :meth:`attach` puts it on an EPS."""
+
+    def __init__(self, lam0: complex, restarts: int, budget: int, tol: float):
+        self.lam0, self.restarts, self.budget, self.tol = complex(lam0), int(restarts), int(budget), float(tol)
+        self.seen, self.growing, self.errors, self.gave_up = -1, True, {}, ""
 
     def attach(self, eps) -> "GrowthWatch":
         eps.setMonitor(self.monitor)
@@ -124,6 +131,15 @@ class GrowthWatch:
         theta = theta[theta != 0]
         self.seen = its
         self.growing = bool(theta.size == 0 or np.any(self.lam0.real + (1.0 / theta).real >= 0))
+        left = np.asarray(err, dtype=float)[nconv:]
+        self.errors[its] = float(left.min()) if left.size else 0.0
+
+    def _too_slow(self, its: int) -> bool:
+        first, now = self.errors.get(1), self.errors.get(its)
+        if not first or not now or now <= self.tol or its <= 1:
+            return False
+        rate = (now / first) ** (1.0 / (its - 1))
+        return rate >= 1.0 or its + np.log(self.tol / now) / np.log(rate) > self.budget
 
     def stopping(self, _eps, its, max_it, nconv, nev):
         reason = import_slepc().EPS.ConvergedReason
@@ -131,23 +147,27 @@ class GrowthWatch:
             return reason.CONVERGED_TOL
         if its >= max_it:
             return reason.DIVERGED_ITS
-        if self.seen == its - 1 >= self.restarts and not self.growing:
-            self.gave_up = True
-            return reason.DIVERGED_ITS
+        if self.seen == its - 1 >= self.restarts:
+            if not self.growing:
+                self.gave_up = "no Ritz value with Re λ ≥ 0"
+            elif self._too_slow(self.seen):
+                self.gave_up = f"converging too slowly to reach the tolerance within {self.budget} restarts"
+            if self.gave_up:
+                return reason.DIVERGED_ITS
         return reason.ITERATING
 
 
 def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 2, ncv: int | None = 12,
                           tol: float = 1e-12, low_rank: float | None = None, max_it: int = 500,
                           options: dict | None = None, gate: float | None = None,
-                          strict_tol: float | None = None, give_up: int | None = None) -> tuple[list, dict]:
+                          strict_tol: float | None = None, give_up: tuple | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues λ of Q(λ) = λ²B + λD − A nearest the complex target λ₀ (module
     docstring).  Returns ``(pairs, info)`` as :func:`meicp.petsc.flutter.complex_shift_solve`
     does, with λ in place of σ: pairs = [(λ with Im λ ≥ 0, x gathered on every rank, backward
     error on Q)], info = {``radius`` (the largest |λ − λ₀| converged), ``nconv``,
     ``iterations``, ``seconds``, ``solves``}.  ``gate``, ``strict_tol``, ``low_rank``,
-    ``max_it``, ``options``: as there; ``give_up``: restarts after which a solve whose Ritz
-    values show nothing growing stops (:class:`GrowthWatch`; info ``gave_up``).
+    ``max_it``, ``options``: as there; ``give_up``: ``(restarts, budget)`` of a
+    :class:`GrowthWatch` on the solve (info ``gave_up``: why it stopped it, or "").
     ProblemError when no ZMUMPS of a known version loads (this search has no real-form
     fallback).  Collective."""
     PETSc = import_petsc()
@@ -175,7 +195,7 @@ def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 
             T.setUp()
             eps.setOperators(T)
             scope.configure(eps)  # setFromOptions, last
-            watch = GrowthWatch(lam0, give_up).attach(eps) if give_up is not None else None
+            watch = None if give_up is None else GrowthWatch(lam0, *give_up, tol=eps.getTolerances()[0]).attach(eps)
 
             def collect():
                 return converged_pairs(eps, T, lam0, inverted=True, residual=ops.residual, gather=ops.gather,
@@ -183,7 +203,7 @@ def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 
 
             pairs, info = solve_tightened(eps, collect, T, gate, strict_tol, vectors)
         info["seconds"] = time.perf_counter() - t0
-        info["gave_up"] = bool(watch is not None and watch.gave_up)
+        info["gave_up"] = "" if watch is None else watch.gave_up
         return pairs, info
     finally:
         for obj in (eps, T, factor, *vectors):
