@@ -171,6 +171,11 @@ def test_the_growth_watch_stops_a_solve_only_where_no_ritz_value_grows():
             slow.monitor(None, its, 0, growing, [0.25 * (0.09 / 0.25) ** ((its - 1) / 8)] * 3)
         assert (slow.stopping(None, 10, 500, 0, 2) == reason.DIVERGED_ITS) is stops
         assert ("too slowly" in slow.gave_up) is stops
+    # estimates SLEPc has not made yet (0) are not progress
+    unset = GrowthWatch(lam0, restarts=3, budget=60, tol=1e-8)
+    for its in range(1, 10):
+        unset.monitor(None, its, 0, growing, [0.25 * (0.09 / 0.25) ** ((its - 1) / 8), 0.0, 0.0])
+    assert unset.stopping(None, 10, 500, 0, 2) == reason.DIVERGED_ITS
     fast = GrowthWatch(lam0, restarts=3, budget=60, tol=1e-8)
     for its in range(1, 5):  # 100-fold per restart: converging
         fast.monitor(None, its, 0, growing, [1e-2 ** its] * 3)

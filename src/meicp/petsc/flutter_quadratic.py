@@ -131,8 +131,13 @@ class GrowthWatch:
         theta = theta[theta != 0]
         self.seen = its
         self.growing = bool(theta.size == 0 or np.any(self.lam0.real + (1.0 / theta).real >= 0))
-        left = np.asarray(err, dtype=float)[nconv:]
-        self.errors[its] = float(left.min()) if left.size else 0.0
+        # the estimates of the pairs still wanted, as the progress monitor reads them (SLEPc
+        # sorts the converged first; 0 is "not estimated yet")
+        wanted = _eps.getDimensions()[0] if _eps is not None else len(err)
+        left = np.asarray(err, dtype=float)[nconv:max(wanted, nconv + 1)]
+        left = left[left > 0]
+        if left.size:
+            self.errors[its] = float(left.min())
 
     def _too_slow(self, its: int) -> bool:
         first, now = self.errors.get(1), self.errors.get(its)
