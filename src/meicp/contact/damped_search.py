@@ -149,8 +149,10 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
             log.info("damped flutter: %d pair(s) near λ₀ = %s, %d passing the residual gate (%d restarts)",
                      len(pairs), f"{lam0:.6g}", passed, info["iterations"])
             # pseudo-pairs, or none converged: a target inside a cluster of ill-conditioned
-            # eigenvalues (as in the undamped search); moved up off it
-            if passed or attempt == OFF_CLUSTER_TRIES:
+            # eigenvalues (as in the undamped search); moved up off it — unless the solve was
+            # given up (nothing grows near it, or nothing converges): a move would pay the
+            # factor and the restarts again for the same
+            if passed or attempt == OFF_CLUSTER_TRIES or info["gave_up"]:
                 break
             moved.append((lam0, moved_off(lam0, attempt)))
             lam0 = moved[-1][1]
