@@ -209,7 +209,7 @@ def scale_chart(args) -> None:
     ax.set_xlabel("wall seconds (meicp solve)")
     ax.set_title("Damped verdict at scale: damped Rayleigh bound and flutter search", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2)
-    ax.set_xlim(0, 2.6 * max(float(r["solve_s"]) for r in rows))
+    ax.set_xlim(0, 2.2 * max(float(r["solve_s"]) for r in rows))
     save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
 
 
