@@ -180,3 +180,16 @@ def test_the_growth_watch_stops_a_solve_only_where_no_ritz_value_grows():
     for its in range(1, 5):  # 100-fold per restart: converging
         fast.monitor(None, its, 0, growing, [1e-2 ** its] * 3)
     assert fast.stopping(None, 5, 500, 0, 2) == reason.ITERATING
+
+
+def test_with_vanishing_damping_the_search_finds_undamped_eigenvalues():
+    """η = 1e-9: every mode the damped search certifies (σ = λ²) is, to 1e-7, a flutter
+    eigenvalue of the undamped pencil from its dense QZ — the two paths share no code but the
+    lattice."""
+    base = two_layer_scene(60, (3, 3), mu=1.0, states="slip+")
+    undamped = meicp.analyze(base, flutter_dense_max=5000)
+    search = meicp.analyze(damped(base, eta=(1e-9, 1e-9)), flutter_dense_max=10)
+    assert undamped.flutter is True and search.flutter is True
+    sigmas = np.array([m.sigma for m in undamped.flutter_modes])
+    for mode in search.flutter_modes:
+        assert np.min(np.abs(sigmas - mode.sigma)) <= 1e-7 * abs(mode.sigma)
