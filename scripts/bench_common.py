@@ -49,6 +49,19 @@ def read_rows(path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
+def row_identity(row: dict) -> frozenset:
+    """A CSV row's identity across a change of columns: its non-empty fields (a column added
+    since the row was written reads back empty and does not make it another row)."""
+    return frozenset((k, v) for k, v in row.items() if v not in ("", None))
+
+
+def rows_before(path) -> set:
+    """The identities of the rows a CSV has now (none when it does not exist): a re-run keeps
+    them, ``keep=lambda r: row_identity(r) in before``."""
+    path = Path(path)
+    return {row_identity(r) for r in read_rows(path)} if path.exists() else set()
+
+
 def write_rows(path, rows: list, fields: list, keep=lambda row: True) -> None:
     """Write ``rows`` after the existing rows for which ``keep(row)`` is true."""
     path = Path(path)

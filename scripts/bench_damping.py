@@ -32,7 +32,7 @@ import argparse
 
 import numpy as np
 
-from bench_common import ROOT, csv_path, read_rows, save_figure, write_rows
+from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
 import meicp
 from meicp.examples import two_layer_scene
 from meicp.io.scene import scene_from_dict
@@ -133,7 +133,7 @@ def scale(args) -> None:
     from meicp.io.results_records import scene_to_toml
 
     path = csv_path("damping_scale")
-    before = {tuple(r.values()) for r in read_rows(path)} if path.exists() else set()
+    before = rows_before(path)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for stem in args.scenes:
@@ -177,7 +177,7 @@ def scale(args) -> None:
                    "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
             rows.append(row)
             print({k: row[k] for k in SCALE_FIELDS[:18]}, flush=True)
-            write_rows(path, rows, SCALE_FIELDS, keep=lambda r: tuple(r.values()) in before)
+            write_rows(path, rows, SCALE_FIELDS, keep=lambda r: row_identity(r) in before)
     scale_chart(args)
 
 

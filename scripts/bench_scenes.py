@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench_common import ROOT, csv_path, read_rows, save_figure, write_rows
+from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
 
 SCENES = ROOT / "data" / "scenes"
 FIELDS = ["scene", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "test", "sigma",
@@ -112,7 +112,7 @@ def run(args) -> None:
     import meicp
 
     rows = []
-    before = {tuple(r.values()) for r in read_rows(csv_path("scenes"))} if csv_path("scenes").exists() else set()
+    before = rows_before(csv_path("scenes"))
     for path in solve_scenes(args.only):
         scene = meicp.load_scene(path)
         dofs = 2 * scene.nx * scene.ny
@@ -155,7 +155,7 @@ def run(args) -> None:
                "flutter_evidence": (doc.get("flutter_evidence") or "")[:200]}
         rows.append(row)
         print({k: row[k] for k in FIELDS[:18]}, flush=True)
-        write_rows(csv_path("scenes"), rows, FIELDS, keep=lambda r: tuple(r.values()) in before)
+        write_rows(csv_path("scenes"), rows, FIELDS, keep=lambda r: row_identity(r) in before)
     undecided = [r["scene"] for r in rows if r["divergence"] is not True and r["divergence"] is not False]
     print(f"{len(rows)} scene(s); divergence undecided: {', '.join(undecided) or 'none'}")
 
