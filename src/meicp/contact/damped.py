@@ -21,9 +21,9 @@ The divergence is enumerated where the enumeration's limits allow; past them the
 Rayleigh bound (:mod:`.damped_rayleigh`, one LDLᵀ inertia) may prove that no λ ≥ 0 exists,
 and otherwise it is *undecided* (no search for damped divergence modes at scale yet), so
 that the damped flutter search at scale (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX``
-retained DOFs) can still prove the lattice unstable.  Every other path that would leave C out (the modal analysis, the critical
-friction, the window procedure, a named divergence method) is a ProblemError saying so
-(:func:`refuse`), never an undamped answer.
+retained DOFs) can still prove the lattice unstable.  Every other path that would leave C
+out (the modal analysis, the critical friction, the window procedure, a named divergence
+method) is a ProblemError saying so (:func:`refuse`), never an undamped answer.
 """
 
 from __future__ import annotations
@@ -107,8 +107,8 @@ def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) -> DivergenceVerdict:
     """The divergence verdict of a damped pencil: the quadratic MEiCP enumerated (modes with
     σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Past the enumeration's
-    limits (method ``"auto"``) the damped Rayleigh bound, else undecided; ProblemError when another method is asked for,
-    or ``"enumerate"`` past its limits.  Collective."""
+    limits (method ``"auto"``) the damped Rayleigh bound, else undecided; ProblemError when
+    another method is asked for, or ``"enumerate"`` past its limits.  Collective."""
     red = pen.maps
     r, n_j = int(red.retained.size), int(red.J.size)
     if method not in (None, "auto", "enumerate"):

@@ -7,7 +7,7 @@ Re λ = 0.05.
 A pair counts as a flutter mode when its backward error on Q is at most
 :data:`~.flutter_verdict.RESIDUAL_TOL` and both Re λ and |Im λ| exceed the margin
 ``MARGIN·η·(|λ|²‖B‖ + |λ|‖D‖ + ‖A‖)/(2|λ|‖B‖ + ‖D‖)`` — the first-order change of λ under a
-backward error η (‖Q'(λ)‖ ≈ 2|λ|‖B‖ + ‖D‖), with the undamped search's :data:`~.flutter.MARGIN`
+backward error η (‖Q'(λ)‖ ≈ 2|λ|‖B‖ + ‖D‖), with the searches' :data:`~.flutter_verdict.MARGIN`
 standing for the unknown condition number (with D = 0 it is that search's σ-margin over 2|λ|).
 Like the undamped search it proves flutter, never its absence, and bounds the growth from
 below only (no Bendixson rectangle for the quadratic pencil yet).  Collective.
@@ -27,24 +27,19 @@ from ..petsc.mat import mat_from_scipy
 from ..petsc.pencil import reduced_matrix
 from .flutter_dense import _fastest_first, _normalise
 from .flutter_growth import search_growth
+from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
+                            off_cluster, proxy_targets)
+from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
+                             memory_refusal, search_conclusion)
 from .lines import BASE
-from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, off_cluster, proxy_targets
-from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair, memory_refusal
 
 log = logging.getLogger("meicp")
 
-#: the unknown condition number the margins stand for (the undamped search's)
-MARGIN = 1e6
 #: eigenpairs per target and the Krylov basis (complex; SLEPc's real form has twice both): at
 #: 10⁶ DOFs a basis of 24 for one pair cost the same
 #: (docs/benchmarks-notes.md, "damped flutter search")
 SEARCH_NEV = 2
 SEARCH_NCV = 12
-#: the λ-line searched when the scene has no proxy: Re λ = LINE_GROWTH, ω = LINE_FREQUENCIES
-LINE_GROWTH = 0.05
-LINE_FREQUENCIES = (0.5, 1.5, 2.5)
-#: a λ within this relative distance of an earlier one is the same eigenvalue
-SAME = 1e-9
 #: restarts after which a solve stops when its Ritz values show nothing growing (Re λ < 0), or
 #: when its error estimates, falling as they did, would not reach the tolerance within
 #: GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`): a speed
@@ -79,9 +74,7 @@ def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
                     + ", ".join(f"{t:.4g} → {m:.4g}" for t, m in zip(targets, moved)))
             targets = moved
         return targets, why
-    return ([complex(LINE_GROWTH, w) for w in LINE_FREQUENCIES],
-            f" on the λ-line Re λ = {LINE_GROWTH:g}, ω = " + ", ".join(f"{w:g}" for w in LINE_FREQUENCIES)
-            + " (no proxy for this scene)")
+    return [complex(LINE_GROWTH, w) for w in LINE_FREQUENCIES], LINE_WHY
 
 
 def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEARCH_NEV,
@@ -133,7 +126,8 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
         lam0 = complex(lam0)
         lam0 = lam0.conjugate() if lam0.imag < 0 else lam0
         for attempt in range(OFF_CLUSTER_TRIES + 1):
-            pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL, give_up=(GIVE_UP_RESTARTS, GIVE_UP_BUDGET), **solve)
+            pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL,
+                                                give_up=(GIVE_UP_RESTARTS, GIVE_UP_BUDGET), **solve)
             passed = sum(res <= RESIDUAL_TOL for _, _, res in pairs)
             disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"], info["gave_up"]))
             for lam, x, res in pairs:
@@ -165,11 +159,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
     evidence = (f"damped: complex shift-and-invert on the companion form of λ²B + λD − A at {len(disks)} target(s)"
                 f"{why}{off}: the eigenvalues SLEPc converged in {text}"
                 + (f"; {len(rejected)} pair(s) failed the residual gate {RESIDUAL_TOL:g}" if rejected else ""))
-    if modes:
-        evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
-                     "is not (not a proof of the growth rate)")
-    else:
-        evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
+    evidence += search_conclusion(modes)
     growth = search_growth(modes, "the damped search computes only the eigenvalues near its targets "
                                   "(no bound on the whole quadratic spectrum yet)")
     return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,

@@ -40,9 +40,10 @@ from .damped import damped_flutter
 from .damped_search import search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import combine_growths, search_growth
-from .flutter_proxy import OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS, SEARCH_TARGETS, off_cluster, proxy_targets
-from .flutter_verdict import (RESIDUAL_TOL, FlutterCandidate, FlutterVerdict, PencilFlutter, RejectedPair,
-                             memory_refusal)
+from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
+                            SEARCH_TARGETS, off_cluster, proxy_targets)
+from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, FlutterVerdict, PencilFlutter,
+                             RejectedPair, memory_refusal, search_conclusion)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
@@ -50,15 +51,10 @@ from .result import FlutterMode
 
 log = logging.getLogger("meicp")
 
-#: large-scale path: |Im σ| must exceed MARGIN·η·(‖A‖₁/‖B‖₁ + |σ|) (η the backward error)
-#: to count as non-real; MARGIN stands for the unknown condition number (κ ≤ 1.1e3 measured
-#: on the dense cases)
-MARGIN = 1e6
-#: large-scale path defaults: eigenpairs per target, Krylov basis
+#: large-scale path defaults: eigenpairs per target, Krylov basis (|Im σ| must exceed
+#: MARGIN·η·(‖A‖₁/‖B‖₁ + |σ|) to count as non-real: :data:`~.flutter_verdict.MARGIN`)
 SEARCH_NEV = 4
 SEARCH_NCV = 16
-#: a σ within this relative distance of an earlier one is the same eigenvalue
-SAME = 1e-9
 OFF_CLUSTER_NCV = 16
 #: an interface-strip proxy's target at that size is searched where it is, for one eigenpair
 #: with a basis of INTERFACE_NCV: on the seeds' scene (extensive_interface.toml) coarsened to
@@ -168,11 +164,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     f"converged in {text}"
                     + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
                     + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else ""))
-    if modes:
-        evidence += (": flutter is proved by the certified mode(s); that the fastest found is the fastest "
-                     "is not (not a proof of the growth rate)")
-    else:
-        evidence += ": no certified flutter mode there — not a proof that none exists (undecided)"
+    evidence += search_conclusion(modes)
     rectangle = None if bound is None or real_max is None else (real_max, bound, real_how)
     growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets", rectangle)
     return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,
@@ -264,8 +256,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
             targets = moved
             search.setdefault("ncv", OFF_CLUSTER_NCV)
         if not targets:
-            targets = lambda_line_targets(0.05, np.linspace(0.5, 2.5, 3))
-            why = " on the λ-line Re λ = 0.05, ω = 0.5 … 2.5 (no proxy for this scene)"
+            targets, why = lambda_line_targets(LINE_GROWTH, LINE_FREQUENCIES), LINE_WHY
     if n >= limits.FLUTTER_SEARCH_LARGE:
         search.setdefault("nev", 2)
         search.setdefault("ncv", 12)

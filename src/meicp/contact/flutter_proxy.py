@@ -30,6 +30,12 @@ PROXY_NEAR_ROWS = 3
 #: (docs/benchmarks-notes.md, "OFF_CLUSTER")
 OFF_CLUSTER = 0.5
 OFF_CLUSTER_TRIES = 1
+#: the targets where a scene has no proxy or its proxy no flutter mode: the λ-line Re λ = LINE_GROWTH at the angular
+#: frequencies LINE_FREQUENCIES (σ = λ² for the undamped search)
+LINE_GROWTH = 0.05
+LINE_FREQUENCIES = (0.5, 1.5, 2.5)
+LINE_WHY = (f" on the λ-line Re λ = {LINE_GROWTH:g}, ω = " + ", ".join(f"{w:g}" for w in LINE_FREQUENCIES)
+            + " (the scene has no proxy, or its proxy no flutter mode)")
 
 
 def off_cluster(tau: complex, attempt: int) -> complex:

@@ -13,6 +13,12 @@ from .flutter_growth import FlutterGrowth
 #: a flutter mode's backward error must be at most this to be reported (the undamped and the
 #: damped paths alike)
 RESIDUAL_TOL = 1e-10
+#: the searches past the dense limit: a value must stand off the real axis by MARGIN·η times the
+#: pencil's scale (η the backward error) to count as non-real; MARGIN stands for the unknown
+#: condition number (κ ≤ 1.1e3 measured on the dense cases); the undamped and the damped alike
+MARGIN = 1e6
+#: the searches: a value within this relative distance of an earlier one is the same eigenvalue
+SAME = 1e-9
 
 
 @dataclass(frozen=True)
@@ -78,3 +84,12 @@ def memory_refusal(comm, need: float, what: str) -> PencilFlutter | None:
     return PencilFlutter(None, evidence=(
         f"not searched: {what} needs about {need / 2**30:.1f} GiB more, {memory / 2**30:.1f} GiB is available on "
         f"{where}: undecided"), growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
+
+
+def search_conclusion(modes: list) -> str:
+    """What a search past the dense limit concludes, the end of its evidence sentence: it
+    proves flutter with a certified mode, never its absence nor the fastest growth."""
+    if modes:
+        return (": flutter is proved by the certified mode(s); that the fastest found is the fastest is not (not a "
+                "proof of the growth rate)")
+    return ": no certified flutter mode there — not a proof that none exists (undecided)"

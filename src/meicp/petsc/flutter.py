@@ -94,6 +94,16 @@ class PencilWork:
             v.destroy()
         self._work = []
 
+    def gather(self, x_local: np.ndarray) -> np.ndarray:
+        """The full complex vector on every rank, x given by this rank's entries (through the
+        first work vector, a right vector of the pencil).  Collective."""
+        v = self._work[0]
+        parts = []
+        for part in (x_local.real, x_local.imag):
+            v.setArray(np.ascontiguousarray(part))
+            parts.append(vec_to_numpy(v))
+        return parts[0] + 1j * parts[1]
+
 
 class SlidingPencilOps(PencilWork):
     """The distributed pencil (A, B) with what every solve needs: ‖A‖₁, ‖B‖₁, this rank's
@@ -134,13 +144,6 @@ class SlidingPencilOps(PencilWork):
         im2 = t1.norm() ** 2
         x_norm = np.sqrt(xr.norm() ** 2 + xi.norm() ** 2)
         return float(np.sqrt(re2 + im2) / ((self.norm_A + abs(sigma) * self.norm_B) * x_norm))
-
-    def gather(self, x_local: np.ndarray) -> np.ndarray:
-        """The full complex vector on every rank.  Collective."""
-        xr, xi = self._work[:2]
-        xr.setArray(np.ascontiguousarray(x_local.real))
-        xi.setArray(np.ascontiguousarray(x_local.imag))
-        return vec_to_numpy(xr) + 1j * vec_to_numpy(xi)
 
     def symmetric_with_diagonal_mass(self) -> bool:
         """A exactly symmetric and B diagonal positive: every σ is real.  Collective."""

@@ -29,7 +29,6 @@ from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from . import import_petsc, import_slepc, mumps_c
 from .flutter import PencilWork, complex_defaults, converged_pairs, local_csr, solve_tightened
-from .mat import vec_to_numpy
 from .options import FLUTTER, OptionsScope, mumps_controls
 
 
@@ -49,15 +48,12 @@ class QuadraticPencilOps(PencilWork):
     def times(self, M, x_local: np.ndarray) -> np.ndarray:
         """``M x`` for a complex x (this rank's entries in, this rank's out).  Collective."""
         x, y = self._work
-        out = np.empty(self.m, dtype=complex)
-        for part, unit in ((x_local.real, 1.0), (x_local.imag, 1j)):
-            x.setArray(np.ascontiguousarray(part))
-            M.mult(x, y)
-            if unit == 1.0:
-                out.real = y.getArray(readonly=True)
-            else:
-                out.imag = y.getArray(readonly=True)
-        return out
+        x.setArray(np.ascontiguousarray(x_local.real))
+        M.mult(x, y)
+        real = y.getArray(readonly=True).copy()
+        x.setArray(np.ascontiguousarray(x_local.imag))
+        M.mult(x, y)
+        return real + 1j * y.getArray(readonly=True)
 
     def scale(self, lam: complex) -> float:
         """|λ|²‖B‖₁ + |λ|‖D‖₁ + ‖A‖₁: the backward error's unit at λ."""
@@ -73,15 +69,6 @@ class QuadraticPencilOps(PencilWork):
             sums = comm.allreduce(sums)
         return float(np.sqrt(sums[0]) / (self.scale(lam) * np.sqrt(sums[1])))
 
-    def gather(self, x_local: np.ndarray) -> np.ndarray:
-        """The full complex vector on every rank.  Collective."""
-        x = self._work[0]
-        parts = []
-        for part in (x_local.real, x_local.imag):
-            x.setArray(np.ascontiguousarray(part))
-            parts.append(vec_to_numpy(x))
-        return parts[0] + 1j * parts[1]
-
 
 class _CompanionInverse:
     """The MATSHELL of T = (L₀ − λ₀L₁)⁻¹L₁ on the real form of the companion vectors: each
@@ -94,8 +81,9 @@ class _CompanionInverse:
         ops, m, lam0 = self.ops, self.ops.m, self.lam0
         a = z.getArray(readonly=True)
         c = a[0::2] + 1j * a[1::2]
-        f, g = c[:m], ops.times(ops.B, c[m:])
-        u = -self.factor.solve(g + ops.times(ops.D, f) + lam0 * ops.times(ops.B, f))
+        f = c[:m]
+        # g + (D + λ₀B)f with g = B·z₂: B once, on z₂ + λ₀f
+        u = -self.factor.solve(ops.times(ops.B, c[m:] + lam0 * f) + ops.times(ops.D, f))
         out = y.getArray()
         w = np.concatenate([u, f + lam0 * u])
         out[0::2], out[1::2] = w.real, w.imag
