@@ -124,8 +124,6 @@ def chart(args) -> None:
 
 def scale(args) -> None:
     import datetime
-    import json
-    import os
     import tempfile
     from pathlib import Path
 
@@ -147,16 +145,8 @@ def scale(args) -> None:
                 scene = scene.with_friction(float(mu))
             damped = Path(tmp) / f"{stem}_damped.toml"
             damped.write_text(scene_to_toml(scene))
-            with bs._Lock(args.lock):  # the two commands side by side, nothing heavy between
-                load1 = os.getloadavg()[0]
-                out, peaks, wall, timed_out = bs._run(bs._command(args, args.ranks, [
-                    "-m", "meicp", "solve", str(damped), "--no-output", "--json", "-q",
-                    *(["--no-flutter"] if args.no_flutter else [])]), args.timeout)
-                eig_out, _, _, _ = bs._run(bs._command(args, args.ranks, [bs.__file__, "eigensolve", str(damped)]),
-                                           args.timeout)
-            doc = json.loads(out) if out.strip() else {}
-            eig = json.loads(eig_out.strip().splitlines()[-1]) if eig_out.strip() else {}
-            solve_s = doc.get("wall", {}).get("total") or wall
+            doc, eig, peaks, _, _, timed_out, load1, solve_s = bs.side_by_side(
+                args, args.ranks, str(damped), ["-q", *(["--no-flutter"] if args.no_flutter else [])], args.lock)
             timings = doc.get("timings", {})
             growth = doc.get("flutter_growth") or {}
             seconds = eig.get("seconds")

@@ -121,22 +121,9 @@ def run(args) -> None:
             continue
         rel = str(path.relative_to(ROOT))
         print(f"{path.stem}: {dofs:,} DOFs on {ranks} rank(s)", flush=True)
-        with _Lock(args.lock if ranks > 1 else None):  # both commands side by side, nothing heavy between
-            load1 = os.getloadavg()[0]
-            solve_cmd = _command(args, ranks, ["-m", "meicp", "solve", rel, "--no-output", "--json",
-                                               "-v" if args.logs else "-q"])
-            log = Path(args.logs) / f"{path.stem}.log" if args.logs else None
-            out, peaks, wall, timed_out = _run(solve_cmd, args.timeout, log)
-            eig_out, eig_peaks, _, _ = _run(_command(args, ranks, [__file__, "eigensolve", rel]), args.timeout)
-        doc = {}
-        try:
-            doc = json.loads(out) if out.strip() else {}
-        except json.JSONDecodeError:
-            pass
-        eig = json.loads(eig_out.strip().splitlines()[-1]) if eig_out.strip() else {}
-        # meicp's own clock ("wall.total": load + analyze) against the eigen-solve's; the
-        # whole command (interpreter, MPI, imports) beside it
-        solve_s = doc.get("wall", {}).get("total") or wall
+        log = Path(args.logs) / f"{path.stem}.log" if args.logs else None
+        side = side_by_side(args, ranks, rel, ["-v" if args.logs else "-q"], args.lock if ranks > 1 else None, log)
+        doc, eig, peaks, eig_peaks, wall, timed_out, load1, solve_s = side
         proofs = doc.get("proofs") or [{}]
         modes = doc.get("modes") or []
         row = {"scene": path.name, "dofs": dofs, "retained": doc.get("sizes", {}).get("retained", ""),
@@ -158,6 +145,28 @@ def run(args) -> None:
         write_rows(csv_path("scenes"), rows, FIELDS, keep=lambda r: row_identity(r) in before)
     undecided = [r["scene"] for r in rows if r["divergence"] is not True and r["divergence"] is not False]
     print(f"{len(rows)} scene(s); divergence undecided: {', '.join(undecided) or 'none'}")
+
+
+def side_by_side(args, ranks: int, scene: str, flags: list[str], lock=None, log: Path | None = None) -> tuple:
+    """``meicp solve SCENE --no-output --json`` (with ``flags``) and then one eigen-solve of
+    the same scene's pencil (:func:`eigensolve`), on ``ranks`` ranks under ``flock lock``
+    (both commands side by side, nothing heavy between).  Returns ``(doc, eig, peaks,
+    eig_peaks, wall, timed_out, load1, solve_s)``: the solve's JSON ({} when it printed none),
+    the eigen-solve's, each command's peak memory per rank, the solve command's wall seconds,
+    whether it timed out, the load average before, and meicp's own clock ("wall.total": load +
+    analyze; the whole command's wall when absent) to set against the eigen-solve's."""
+    with _Lock(lock):
+        load1 = os.getloadavg()[0]
+        out, peaks, wall, timed_out = _run(_command(args, ranks, ["-m", "meicp", "solve", scene, "--no-output",
+                                                                  "--json", *flags]), args.timeout, log)
+        eig_out, eig_peaks, _, _ = _run(_command(args, ranks, [__file__, "eigensolve", scene]), args.timeout)
+    doc = {}
+    try:
+        doc = json.loads(out) if out.strip() else {}
+    except json.JSONDecodeError:
+        pass
+    eig = json.loads(eig_out.strip().splitlines()[-1]) if eig_out.strip() else {}
+    return doc, eig, peaks, eig_peaks, wall, timed_out, load1, doc.get("wall", {}).get("total") or wall
 
 
 def eigensolve(args) -> None:

@@ -32,7 +32,8 @@ class SweepRow:
     the fastest flutter mode *found* — a lower bound on the fastest; flutter_growth_bound:
     an upper bound on every flutter mode's Re λ when the whole spectrum proves one (0 when
     flutter is excluded), else None (the search's Bendixson bound, proved but loose, is in
-    the analysis' ``flutter_growth``, not here: the chart would read it as the fastest); flutter_frequency: |Im λ| of the mode found.  status:
+    the analysis' ``flutter_growth``, not here: the chart would read it as the fastest);
+    flutter_frequency: |Im λ| of the mode found.  status:
     the analysis' (``solved``, ``inconclusive``, ``failed`` when it raised).  seconds: its
     wall time.  evidence: what decided each verdict, shortened."""
 
