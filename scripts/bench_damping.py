@@ -5,6 +5,7 @@ one chart — the damping that raises a flutter threshold (base contact) and the
 lowers it (frictional interface: the destabilisation paradox).
 
     .venv/bin/python scripts/bench_damping.py run      # -> damping_growth.csv
+    .venv/bin/python scripts/bench_damping.py onsets   # -> damping_onsets.csv
     .venv/bin/python scripts/bench_damping.py chart    # -> damping_growth.png
     .venv/bin/python scripts/bench_damping.py scale --lock LOCK   # -> damping_scale.csv, .png
 
@@ -13,8 +14,11 @@ Scenes (the dense damped references, where every answer is a proof or a certifie
 of tests/test_damping.py (k 2 under k 1, ρ 1, every pair slip+).  At each μ of the grid:
 the divergence verdict and λ of its fastest certified mode; the flutter verdict and its
 growth bracket (exact on the dense path).  Growth 0 where a verdict is proved absent; an
-undecided verdict leaves a gap.  The grid's first μ with certified flutter is a measured
-threshold, not a proved onset (the damped critical friction is not built).
+undecided verdict leaves a gap.  ``onsets``: ``meicp.critical_friction`` of each scene and
+viscosity — the flutter onset μ_f (an interval cover of the companion form from μ = 0 and a
+certified damped flutter mode, docs/critical-friction.md) and the divergence onset μ_c, each a
+certified bracket — drawn on the chart as vertical lines (solid: an exact onset, its bracket
+narrower than 10⁻⁶·μ; a shaded band: a bracket that is not).
 
 ``scale``: the damped verdict at 10⁶ DOFs on ``--ranks`` ranks (issue 31, deliverable 5): each
 shipped 10⁶-DOF scene file of ``--scenes`` (``stem@μ``: at friction μ) with viscosity
@@ -44,6 +48,8 @@ FIELDS = ["scene", "eta", "mu", "divergence", "divergence_growth", "flutter", "f
           "flutter_exact", "seconds"]
 #: viscosities of the two layers: none, equal, a viscous base layer under a less viscous one
 ETAS = {"0": (0.0, 0.0), "0.02 / 0.02": (0.02, 0.02), "0.1 / 0.01": (0.1, 0.01)}
+ONSET_FIELDS = ["scene", "eta", "flutter_lower", "flutter_upper", "flutter_exact", "divergence_lower",
+                "divergence_upper", "divergence_exact", "first", "seconds", "commit"]
 
 
 def scenes() -> dict:
@@ -84,6 +90,26 @@ def run(args) -> None:
     write_rows(csv_path("damping_growth"), rows, FIELDS, keep=lambda row: False)
 
 
+def onsets(args) -> None:
+    import time
+
+    import bench_scenes as bs
+
+    rows = []
+    for name, scene in scenes().items():
+        for label, eta in ETAS.items():
+            t0 = time.perf_counter()
+            mu = meicp.critical_friction(with_viscosity(scene, eta))
+            f, d = mu.flutter, mu.divergence
+            rows.append({"scene": name, "eta": label, "flutter_lower": f"{f.lower:.10g}",
+                         "flutter_upper": f"{f.upper:.10g}", "flutter_exact": f.exact,
+                         "divergence_lower": f"{d.lower:.10g}", "divergence_upper": f"{d.upper:.10g}",
+                         "divergence_exact": d.exact, "first": mu.first or "",
+                         "seconds": f"{time.perf_counter() - t0:.2f}", "commit": bs._commit()})
+            print(rows[-1], flush=True)
+    write_rows(csv_path("damping_onsets"), rows, ONSET_FIELDS, keep=lambda row: False)
+
+
 def _growth(rows, verdict: str, value: str) -> np.ndarray:
     """Growth per row: the certified value, 0 where proved absent, NaN where undecided."""
     out = []
@@ -99,6 +125,7 @@ def chart(args) -> None:
     import matplotlib.pyplot as plt
 
     rows = read_rows(csv_path("damping_growth"))
+    onset = {(r["scene"], r["eta"]): r for r in read_rows(csv_path("damping_onsets"))}
     names = list(dict.fromkeys(r["scene"] for r in rows))
     fig, axes = plt.subplots(1, len(names), figsize=(6.2 * len(names), 4.6), squeeze=False)
     colours = dict(zip(ETAS, ("black", "tab:blue", "tab:orange")))
@@ -110,11 +137,20 @@ def chart(args) -> None:
                     label=f"flutter, η = {label}")
             ax.plot(mu, _growth(part, "divergence", "divergence_growth"), "--", color=colours[label],
                     label=f"divergence, η = {label}")
-            flutters = [float(r["mu"]) for r in part if r["flutter"] == "True"]
-            if flutters:
-                ax.axvline(min(flutters), color=colours[label], ls=":", lw=1)
-        ax.set_title(f"{name}: fastest growth Re λ against μ\n(dotted: first μ of the grid with certified flutter)",
-                     fontsize=9)
+            o = onset.get((name, label))
+            if o is not None:
+                lo, up = float(o["flutter_lower"]), float(o["flutter_upper"])
+                if o["flutter_exact"] == "True":
+                    ax.axvline(up, color=colours[label], ls="-", lw=0.8, alpha=0.7)
+                    ax.annotate(f"μ_f = {up:.4f}", (up, 0), xytext=(2, 4 + 10 * list(ETAS).index(label)),
+                                textcoords="offset points", fontsize=6, color=colours[label], rotation=90)
+                elif np.isfinite(up):
+                    ax.axvspan(lo, up, color=colours[label], alpha=0.08)
+        mu_c = [float(o["divergence_upper"]) for (n, _), o in onset.items() if n == name]
+        if mu_c and np.isfinite(mu_c[0]) and mu_c[0] <= max(float(r["mu"]) for r in rows):
+            ax.axvline(mu_c[0], color="gray", ls="--", lw=0.8)
+        ax.set_title(f"{name}: fastest growth Re λ against μ\nlines: proved flutter onset μ_f per η; shaded: "
+                     "its bracket, not exact; grey dashed: μ_c", fontsize=8)
         ax.set_xlabel("friction coefficient μ")
         ax.set_ylabel("growth rate Re λ (0: proved absent)")
         ax.grid(alpha=0.3)
@@ -210,6 +246,7 @@ def main() -> None:
     r.add_argument("--mu-min", type=float, default=0.05)
     r.add_argument("--mu-max", type=float, default=3.0)
     r.add_argument("--points", type=int, default=60)
+    sub.add_parser("onsets")
     sub.add_parser("chart")
     c = sub.add_parser("scale")
     c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact"],

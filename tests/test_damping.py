@@ -383,8 +383,6 @@ def test_heavy_damping_leaves_no_flutter():
 
 def test_paths_not_built_for_damping_refuse_a_damped_scene():
     s = damped(TWO_LAYERS, eta=(0.02, 0.02))
-    with pytest.raises(ProblemError, match="the critical friction is not supported with damping yet"):
-        meicp.critical_friction(s)
     with pytest.raises(ProblemError, match="method 'active-set' is not supported with damping yet"):
         meicp.analyze(s, method="active-set")
     free = damped(two_layer_scene(4, (2, 2), bottom="fixed"), eta=(0.1, 0.1))

@@ -73,3 +73,17 @@ def test_the_damped_flutter_search_is_the_same_on_one_and_two_ranks(comm):
         assert np.min(np.abs(lam_one - np.sqrt(m.sigma))) <= 1e-10 * abs(m.sigma) ** 0.5
     assert two.flutter_modes[0].growth_rate == pytest.approx(one.flutter_modes[0].growth_rate, rel=1e-10)
     assert comm.bcast(two.flutter_growth.lower, root=0) == two.flutter_growth.lower
+
+
+def test_the_damped_critical_friction_is_the_same_on_one_and_two_ranks(comm):
+    """Both onsets of a damped interface (the cover on rank 0, broadcast; the condensations
+    distributed) on 2 ranks as on one, and every rank holds the same answer."""
+    from mpi4py import MPI
+
+    scene = damped(INTERFACE, eta=(0.02, 0.02))
+    two = meicp.critical_friction(scene, comm=comm)
+    one = meicp.critical_friction(scene, comm=MPI.COMM_SELF)
+    assert two.flutter.exact and "companion form" in two.flutter.evidence
+    assert (two.flutter.lower, two.flutter.upper) == (one.flutter.lower, one.flutter.upper)
+    assert (two.divergence.lower, two.divergence.upper) == (one.divergence.lower, one.divergence.upper)
+    assert comm.allgather(float(two)) == [float(two)] * comm.size

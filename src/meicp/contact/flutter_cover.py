@@ -56,6 +56,8 @@ class PencilFamily:
     B1: sp.csr_matrix
     maps: object = None
     branch: str = ""
+    #: why a cover may not start at μ = 0 (the onset's evidence)
+    at_zero = "a degenerate eigenvalue of the symmetric pencil may split into a non-real pair at any μ > 0"
 
     @property
     def order(self) -> int:
@@ -166,84 +168,142 @@ def cover_step(family: PencilFamily, mu: float) -> CoverStep:
 
 
 def _radius(family: PencilFamily, mu: float, lam: np.ndarray, X: np.ndarray) -> float:
-    n = lam.size
-    A0, A1, B0, B1 = family.A0, family.A1, family.B0, family.B1
-    B = (B0 + mu * B1).tocsr()
-    Y = np.linalg.inv(B @ X)
-    # balance: ‖xᵢ‖ = ‖yᵢ‖ (powers of two, exact), so each row of Y·M·X weighs both alike
-    p = np.exp2(np.round(0.5 * np.log2(np.linalg.norm(Y, axis=1) / np.linalg.norm(X, axis=0))))
-    p = np.where(np.isfinite(p) & (p > 0), p, 1.0)
-    X, Y = X * p[None, :], Y / p[:, None]
-    g = _gamma(n)
-    absY = np.abs(Y)
-    xsum = np.abs(X).sum(axis=1)  # |X|·1
+    disks = Disks.of(family.A0, family.A1, family.B0, family.B1, mu, lam, X)
+    return 0.0 if disks is None else disks.radius(disks.disjoint)
 
-    def product(M):
-        """Y·M·X and the row sums of a bound on its rounding error, γ|Y|(|M|(|X|1))."""
-        return Y @ (M @ X), g * (absY @ (abs(M) @ xsum))
 
-    P0, e_P0 = product(A0)
-    P1, e_P1 = product(A1)
-    Q0, e_Q0 = product(B0)
-    Q1, e_Q1 = (product(B1) if B1.count_nonzero() else (np.zeros((n, n)), np.zeros(n)))
-    amax = float(np.max(np.abs(lam)))
-    m = abs(mu)
-    # N_A = P0 + μP1 − Λ, N_B = Q0 + μQ1 − I, G = P1, E = Q1, each with the row sums of its error
-    N_A = P0 + mu * P1
-    N_A[np.diag_indices(n)] -= lam
-    e_NA = (e_P0 + m * e_P1) * (1 + 4 * U) + 4 * U * (_rows(P0) + m * _rows(P1) + np.abs(lam))
-    N_B = Q0 + mu * Q1
-    N_B[np.diag_indices(n)] -= 1.0
-    e_NB = (e_Q0 + m * e_Q1) * (1 + 4 * U) + 4 * U * (_rows(Q0) + m * _rows(Q1) + 1.0)
-    rows_NA = _rows(N_A) * (1 + n * U) + e_NA
-    rows_NB = _rows(N_B) * (1 + n * U) + e_NB
-    nA, nB = float(rows_NA.max()), float(rows_NB.max())
-    nG = float((_rows(P1) * (1 + n * U) + e_P1).max())
-    nE = float((_rows(Q1) * (1 + n * U) + e_Q1).max())
-    if not nB < 0.5:
-        return 0.0
-    # S₀ = N_A − N_BΛ, wholly in the radii; S₁ = G − EΛ: its diagonal moves the centres
-    a = (rows_NA + (np.abs(N_B) @ np.abs(lam)) * (1 + n * U) + e_NB * amax) * (1 + 4 * U)
-    S1 = P1 - Q1 * lam[None, :]
-    e_S1 = (e_P1 + e_Q1 * amax) * (1 + 4 * U) + 4 * U * (_rows(P1) + np.abs(Q1) @ np.abs(lam))
-    drift = np.diag(S1).copy()
-    b = (_rows(S1) - np.abs(drift)) * (1 + n * U) + e_S1
+@dataclass
+class Disks:
+    """The Gershgorin disks of the lemma (module docstring) around the eigenvalues ``lam`` of
+    ``(A(μ₀), B(μ₀))``, real or complex: disk i has the centre ``lam[i] + δ·drift[i]`` and a
+    radius at most ``a[i] + |δ|·b[i] + ‖R‖∞`` for ``μ = μ₀ + δ``; :meth:`rest` bounds ‖R‖∞
+    for ``|δ| ≤ Δ`` and ``cap`` is the largest Δ the lemma allows (τ < 1/2)."""
 
-    def rest(delta):
+    lam: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    drift: np.ndarray
+    nA: float
+    nB: float
+    nG: float
+    nE: float
+    amax: float
+    cap: float
+    #: with ``entries``: entrywise bounds |S₀| and |S₁| (S₁'s diagonal zeroed: it is ``drift``)
+    #: and the row sums of their rounding errors, ``e0`` and ``e1``
+    S0: np.ndarray | None = None
+    S1: np.ndarray | None = None
+    e0: np.ndarray | None = None
+    e1: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, A0, A1, B0, B1, mu: float, lam: np.ndarray, X: np.ndarray, *,
+           entries: bool = False) -> "Disks | None":
+        """The disks from the eigenvectors X (columns) at ``mu``, every product with a bound on
+        its rounding error; None when ‖N_B‖∞ ≥ 1/2 (the eigenvectors too inaccurate for the
+        lemma).  LinAlgError when B(μ₀)X is singular.  ``entries``: keep the entrywise
+        bounds too (dense, order²), for disks scaled one at a time."""
+        n = lam.size
+        B = (B0 + mu * B1).tocsr()
+        Y = np.linalg.inv(B @ X)
+        # balance: ‖xᵢ‖ = ‖yᵢ‖ (powers of two, exact), so each row of Y·M·X weighs both alike
+        p = np.exp2(np.round(0.5 * np.log2(np.linalg.norm(Y, axis=1) / np.linalg.norm(X, axis=0))))
+        p = np.where(np.isfinite(p) & (p > 0), p, 1.0)
+        X, Y = X * p[None, :], Y / p[:, None]
+        # complex products: each multiply–add rounds up to about √2·2u, so a factor 4 is ample
+        g = _gamma(n) * (4.0 if np.iscomplexobj(X) or np.iscomplexobj(Y) else 1.0)
+        absY = np.abs(Y)
+        xsum = np.abs(X).sum(axis=1)  # |X|·1
+
+        def product(M):
+            """Y·M·X and the row sums of a bound on its rounding error, γ|Y|(|M|(|X|1))."""
+            return Y @ (M @ X), g * (absY @ (abs(M) @ xsum))
+
+        P0, e_P0 = product(A0)
+        P1, e_P1 = product(A1)
+        Q0, e_Q0 = product(B0)
+        Q1, e_Q1 = (product(B1) if B1.count_nonzero() else (np.zeros((n, n)), np.zeros(n)))
+        alam = np.abs(lam)
+        amax = float(np.max(alam))
+        m = abs(mu)
+        # N_A = P0 + μP1 − Λ, N_B = Q0 + μQ1 − I, G = P1, E = Q1, each with the row sums of its error
+        N_A = P0 + mu * P1
+        N_A[np.diag_indices(n)] -= lam
+        e_NA = (e_P0 + m * e_P1) * (1 + 4 * U) + 4 * U * (_rows(P0) + m * _rows(P1) + alam)
+        N_B = Q0 + mu * Q1
+        N_B[np.diag_indices(n)] -= 1.0
+        e_NB = (e_Q0 + m * e_Q1) * (1 + 4 * U) + 4 * U * (_rows(Q0) + m * _rows(Q1) + 1.0)
+        rows_NA = _rows(N_A) * (1 + n * U) + e_NA
+        rows_NB = _rows(N_B) * (1 + n * U) + e_NB
+        nA, nB = float(rows_NA.max()), float(rows_NB.max())
+        nG = float((_rows(P1) * (1 + n * U) + e_P1).max())
+        nE = float((_rows(Q1) * (1 + n * U) + e_Q1).max())
+        if not nB < 0.5:
+            return None
+        # S₀ = N_A − N_BΛ, wholly in the radii; S₁ = G − EΛ: its diagonal moves the centres
+        a = (rows_NA + (np.abs(N_B) @ alam) * (1 + n * U) + e_NB * amax) * (1 + 4 * U)
+        S1 = P1 - Q1 * lam[None, :]
+        e_S1 = (e_P1 + e_Q1 * amax) * (1 + 4 * U) + 4 * U * (_rows(P1) + np.abs(Q1) @ alam)
+        drift = np.diag(S1).copy()
+        b = (_rows(S1) - np.abs(drift)) * (1 + n * U) + e_S1
+        cap = (0.5 - nB) / nE * (1 - 1e-6) if nE > 0 else np.inf  # τ < 1/2 on the whole interval
+        if not entries:
+            return cls(lam, a, b, drift, nA, nB, nG, nE, amax, cap)
+        S0 = (np.abs(N_A) + np.abs(N_B) * alam[None, :]) * (1 + (n + 4) * U)
+        S1abs = np.abs(S1) * (1 + (n + 4) * U)
+        S1abs[np.diag_indices(n)] = 0.0
+        e0 = (e_NA + e_NB * amax) * (1 + 4 * U)
+        return cls(lam, a, b, drift, nA, nB, nG, nE, amax, cap, S0, S1abs, e0, e_S1)
+
+    def rest(self, delta: float) -> float:
         """The bound on ‖R‖∞ for |δ| ≤ delta (inf when τ ≥ 1/2)."""
-        tau = nB + delta * nE
+        tau = self.nB + delta * self.nE
         if not tau < 0.5:
             return np.inf
-        return (tau * (nA + delta * nG) + tau * tau / (1 - tau) * (amax + nA + delta * nG)) * (1 + 8 * U)
+        return (tau * (self.nA + delta * self.nG)
+                + tau * tau / (1 - tau) * (self.amax + self.nA + delta * self.nG)) * (1 + 8 * U)
 
-    def largest(r):
-        """The largest Δ with every pair of disks disjoint for |δ| ≤ Δ, ‖R‖∞ ≤ r."""
+    def separation(self, lo: int, hi: int, r: float, centres: np.ndarray | None = None, drifts=None):
+        """For the disks lo..hi−1 (or, given, other ``centres`` moving by ``drifts`` with the
+        same radii) against every disk j: ``(top, slope)`` with the two disjoint for every
+        |δ| ≤ Δ when ``Δ·slope < top`` (a disk and itself: top = inf)."""
+        i = slice(lo, hi)
+        c = self.lam[i] if centres is None else centres
+        d = self.drift[i] if drifts is None else drifts
+        gap = np.abs(self.lam[None, :] - c[:, None])
+        need = self.a[i, None] + self.a[None, :] + 2 * r
+        top = gap - need - 8 * U * (gap + need)
+        slope = (np.abs(self.drift[None, :] - d[:, None]) + self.b[i, None] + self.b[None, :]) * (1 + 8 * U)
+        idx = np.arange(lo, hi)
+        top[idx - lo, idx] = np.inf
+        return top, slope
+
+    def disjoint(self, r: float) -> float:
+        """The largest Δ with every pair of disks disjoint for |δ| ≤ Δ, ‖R‖∞ ≤ r (0: none):
+        then each holds one eigenvalue, real when its centre is."""
         best = np.inf
+        n = self.lam.size
         for lo in range(0, n, PAIR_BLOCK):
-            i = slice(lo, min(lo + PAIR_BLOCK, n))
-            gap = np.abs(lam[None, :] - lam[i, None])
-            need = a[i, None] + a[None, :] + 2 * r
-            top = gap - need - 8 * U * (gap + need)
-            slope = (np.abs(drift[None, :] - drift[i, None]) + b[i, None] + b[None, :]) * (1 + 8 * U)
-            idx = np.arange(lo, min(lo + PAIR_BLOCK, n))
-            top[idx - lo, idx] = np.inf  # a disk and itself
+            top, slope = self.separation(lo, min(lo + PAIR_BLOCK, n), r)
             if np.any(top <= 0):
                 return 0.0
             with np.errstate(divide="ignore"):
                 best = min(best, float(np.min(top / slope)))
         return best * (1 - 1e-6)
 
-    cap = (0.5 - nB) / nE * (1 - 1e-6) if nE > 0 else np.inf  # τ < 1/2 on the whole interval
-    delta = min(largest(rest(0.0)), cap)
-    if not np.isfinite(delta):  # no pair drifts or couples: only ‖R‖∞ limits the interval
-        if nG == 0:
-            return np.inf
-        delta = 1e6
-    for _ in range(200):  # ‖R‖∞ grows with Δ: shrink until the Δ found holds with its own bound
-        if delta <= 0 or largest(rest(delta)) >= delta:
-            return delta
-        delta *= 0.5
-    return 0.0
+    def radius(self, largest) -> float:
+        """The largest Δ ≤ ``cap`` for which ``largest(‖R‖∞ bound)`` holds with the bound of
+        that Δ itself (‖R‖∞ grows with Δ: halved until it does); 0 when none."""
+        delta = min(largest(self.rest(0.0)), self.cap)
+        if not np.isfinite(delta):  # nothing drifts or couples: only ‖R‖∞ limits the interval
+            if self.nG == 0:
+                return np.inf
+            delta = 1e6
+        for _ in range(200):
+            if delta <= 0 or largest(self.rest(delta)) >= delta:
+                return delta
+            delta *= 0.5
+        return 0.0
 
 
-__all__ = ["CoverStep", "PencilFamily", "cover_step"]
+__all__ = ["CoverStep", "Disks", "PencilFamily", "cover_step"]

@@ -142,7 +142,9 @@ def proxy_targets(scene, lines, count: int = SEARCH_TARGETS) -> list[complex]:
         if pen.A is None:
             found = PencilFlutter(False)
         else:
-            found = damped_flutter(pen) if pen.damped else dense_flutter(pen.A, pen.B)
+            # small by construction: dense whatever FLUTTER_DENSE_MAX says, as dense_flutter is
+            found = (damped_flutter(pen, dense_max=pen.maps.retained.size) if pen.damped
+                     else dense_flutter(pen.A, pen.B))
 
     def near_contact(x):
         energy = (np.abs(red.Q @ x) ** 2).reshape(proxy.ny, proxy.nx, 2).sum(axis=(1, 2))

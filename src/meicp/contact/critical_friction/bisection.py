@@ -1,7 +1,12 @@
 """The cross-check of an enumerated critical friction on the σ-problem with the mass: a σ ≥ 0
 mode must exist just above μ_c, and where modes exist below it they must be born at σ > 0,
 each decided by enumerating the whole reduced pencil at that μ (every contact's μ set to it:
-:meth:`~meicp.contact.maps.ReducedSystem.with_friction`)."""
+:meth:`~meicp.contact.maps.ReducedSystem.with_friction`).
+
+On a damped lattice the enumeration is the quadratic MEiCP's (real λ ≥ 0, σ = λ²), and the
+check above μ_c is left out: there a λ = 0 mode moves to λ ≈ c·(μ − μ_c)/(ξᵀDx), which is
+negative when the friction rows make ξᵀDx < 0 — the mode then exists *below* μ_c instead,
+and the check below finds where it starts (docs/damping.md)."""
 
 from __future__ import annotations
 
@@ -9,7 +14,9 @@ import numpy as np
 
 from ...core import limits
 from ...core.errors import ConvergenceError
+from ...eicp.quadratic import solve_quadratic_eicp
 from ...eicp.solve import solve_eicp
+from ..damped import damping_matrix
 from ..maps import grazing_cases, reduced_system
 from ..problem import pencil_of
 
@@ -29,9 +36,15 @@ def largest_sigma(lattice, lines, mu) -> float | None:
         if pen.A is None:
             continue  # every DOF held: no mode (as in analyze)
         A, B = pen.A.toarray(), pen.B.toarray()
-        r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=limits.EICP_MAX_J)  # internal: no budget
-        if r.solutions:
-            sigma = max(sol.lam for sol in r.solutions) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
+        if pen.damped:
+            r = solve_quadratic_eicp(A, B, damping_matrix(pen).toarray(), pen.J, lam_min=0.0,
+                                     max_j=limits.EICP_MAX_J)
+            found = [max(sol.lam, 0.0) ** 2 for sol in r.solutions]
+        else:
+            r = solve_eicp(A, B, J=pen.J, method="enumerate", lam_min=0.0, max_j=limits.EICP_MAX_J)  # internal: no budget
+            found = [sol.lam for sol in r.solutions]
+        if found:
+            sigma = max(found) / (np.abs(A).max() / max(np.abs(B).max(), 1e-300))
             best = sigma if best is None else max(best, sigma)
     return best
 
@@ -45,7 +58,7 @@ def check_by_bisection(lattice, lines, mu_c, mu_max, tol) -> str:
         return largest_sigma(lattice, lines, mu)
 
     top = mu_c * (1 - 1e-6) - 1e-12 if np.isfinite(mu_c) else mu_max
-    if np.isfinite(mu_c) and sigma_at(mu_c * (1 + 1e-6) + 1e-12) is None:
+    if np.isfinite(mu_c) and not lattice.model.damped and sigma_at(mu_c * (1 + 1e-6) + 1e-12) is None:
         raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
                                "existence disagree")
     sigma = None if top < 0 else sigma_at(top)

@@ -29,8 +29,11 @@ import numpy as np
 
 from ...core import limits
 from ...core.errors import ConvergenceError
+from ...eicp.quadratic import quadratic_spectrum
 from ...petsc.pencil import reduced_pencil
 from ..flutter import _to_mode, grazing_branches, pencil_flutter
+from ..damped import classify_spectrum
+from ..damped_cover import QuadraticFamily, damped_cover_step
 from ..flutter_dense import dense_flutter
 from ..flutter_cover import PencilFamily, cover_step
 from ..maps import reduced_system
@@ -89,15 +92,31 @@ class Branch:
 
 def sliding_families(lattice, lines) -> list[Branch]:
     """The sliding pencils ``(A₀ + μA₁, B₀ + μB₁)`` of the scene's states, one per grazing
-    branch, every contact at the same μ (SciPy, from the lattice's K and M)."""
+    branch, every contact at the same μ (SciPy, from the lattice's K and M); on a damped
+    lattice the quadratic ones, with ``D₀ + μD₁`` from its C
+    (:class:`~meicp.contact.damped_cover.QuadraticFamily`)."""
     K, M = lattice.K, lattice.M
+    C = lattice.damping() if lattice.model.damped else None
     out = []
     for label, branch in grazing_branches(lines):
         red = reduced_system(lattice.model, branch, ())
         A0, B0 = reduced_pencil(K, M, red.P0, red.Q, red.retained)
         A1, B1 = reduced_pencil(K, M, red.P1, red.Q, red.retained)
-        out.append(Branch(label, list(branch), PencilFamily(A0, A1, B0, B1, red, label)))
+        if C is None:
+            family = PencilFamily(A0, A1, B0, B1, red, label)
+        else:
+            family = QuadraticFamily(A0, A1, B0, B1, (red.P0 @ C @ red.Q).tocsr(), (red.P1 @ C @ red.Q).tocsr(),
+                                     red, label)
+        out.append(Branch(label, list(branch), family))
     return out
+
+
+def _damped(families) -> bool:
+    return any(isinstance(f, QuadraticFamily) for f in families)
+
+
+def _cover_step(family, mu: float):
+    return damped_cover_step(family, mu) if isinstance(family, QuadraticFamily) else cover_step(family, mu)
 
 
 def flutter_onset(lattice, lines, scene, *, mu_max: float, comm=None, options: dict | None = None) -> Onset:
@@ -108,8 +127,11 @@ def flutter_onset(lattice, lines, scene, *, mu_max: float, comm=None, options: d
     clock = time.perf_counter()
     branches = sliding_families(lattice, lines)
     if not any(b.family.depends_on_mu for b in branches) and all(_symmetric(b.family) for b in branches):
+        damped = ("; with damping D = Q̃ᵀCQ̃ ⪰ 0, so xᴴQ(λ)x = 0 gives Re λ ≤ 0 for a non-real λ"
+                  if _damped([b.family for b in branches]) else "")
         return Onset(np.inf, np.inf, True, "no contact slides: the sliding pencil does not depend on μ and "
-                                           "is symmetric with B positive definite — no flutter at any μ (a proof)")
+                                           f"is symmetric with B positive definite{damped} — no flutter at any μ "
+                                           "(a proof)")
     frictions = [line.friction for line in lines if line.friction and line.friction > 0]
     start = min(max(frictions, default=MU_FIRST), mu_max)
     order = max(b.family.order for b in branches)
@@ -130,6 +152,11 @@ def _symmetric(family: PencilFamily) -> bool:
         return True
     if (A != A.T).nnz or (B != B.T).nnz:
         return False
+    if isinstance(family, QuadraticFamily):  # D = P̃₀CQ̃ is a congruence of C ⪰ 0 only when P̃₀ = Q̃ᵀ
+        maps = family.maps
+        if maps is None or (maps.P0 != maps.Q.T).nnz:
+            return False
+        return _symmetric(PencilFamily(A, family.A1, B, family.B1))
     if family.diagonal:
         return True
     if family.order > limits.FLUTTER_DENSE_MAX:
@@ -168,7 +195,7 @@ class _Cover:
                 self.stalled = "budget"
                 return
             centre = self.reached + self.ahead if self.started else 0.0
-            step = cover_step(self.family, centre)
+            step = _cover_step(self.family, centre)
             self.steps += 1
             if step.radius > 0 and centre - step.radius <= self.reached:
                 # the next centre where its interval, predicted from the trend of the last two,
@@ -182,8 +209,7 @@ class _Cover:
                     return
                 continue
             if not self.started:
-                self.stalled = (f"at μ = 0: {step.why} (a degenerate eigenvalue of the symmetric pencil may split "
-                                "into a non-real pair at any μ > 0)")
+                self.stalled = f"at μ = 0: {step.why} ({self.family.at_zero})"
                 return
             hole = centre - self.reached
             self.ahead = min(0.9 * step.radius, 0.5 * hole) if step.radius > 0 else 0.25 * hole
@@ -202,8 +228,12 @@ def _verdict(families, mu: float, budget: Budget):
     for fam in families:
         if not budget.take():
             return None, None
-        A, B = fam.at(mu)
-        part = dense_flutter(A, B)
+        if isinstance(fam, QuadraticFamily):
+            A, B, D = fam.at(mu)
+            part = classify_spectrum(quadratic_spectrum(A.toarray(), B.toarray(), D.toarray()))
+        else:
+            A, B = fam.at(mu)
+            part = dense_flutter(A, B)
         if part.flutter is not True:
             return part.flutter, None
         if mode is None:
@@ -298,11 +328,12 @@ def _dense_result(st: _DenseOnset, mu_max: float) -> Onset:
     steps = sum(c.steps for c in st.covers)
     upper, width = st.upper, st.width
     lower = min(st.lower, upper, mu_max)
-    text = (f"every σ proved real and simple for μ in [0, {lower:.10g}] by {steps} dense eigen-decompositions "
-            "(Gershgorin disks in the eigenbasis; an interval cover, a proof)")
+    damped = _damped(st.families)
+    text = (f"every {'λ proved real or decaying (Re λ < 0)' if damped else 'σ proved real and simple'} for μ in "
+            f"[0, {lower:.10g}] by {steps} dense eigen-decompositions (Gershgorin disks in the eigenbasis"
+            f"{' of the companion form' if damped else ''}; an interval cover, a proof)")
     if st.mode is not None:
-        text += (f"; a certified non-real σ = {st.mode.sigma.real:.6g}{st.mode.sigma.imag:+.6g}i at μ = {upper:.10g} "
-                 f"(|Im σ| > radius {st.mode.radius:.1e}, {st.mode.found_by})")
+        text += f"; a certified {_mode_text(st.mode, damped)} at μ = {upper:.10g} ({st.mode.found_by})"
     else:
         shown = ", ".join(f"{m:.6g}" for m in st.tried[:8]) + (", …" if len(st.tried) > 8 else "")
         text += f"; no certified flutter mode at the {len(st.tried)} μ tried ({shown})"
@@ -356,13 +387,19 @@ def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, op
     text = (f"{_order_text(branches)}: the search proves flutter, never its absence, so nothing is proved "
             f"below the upper end (lower end 0, not exact); searched at μ = {', '.join(f'{m:.6g}' for m in tried)}")
     if mode is not None:
-        text += (f"; a certified non-real σ = {mode.sigma.real:.6g}{mode.sigma.imag:+.6g}i at μ = {upper:.10g} "
-                 f"({mode.found_by})")
+        text += f"; a certified {_mode_text(mode, _damped([b.family for b in branches]))} at μ = {upper:.10g} ({mode.found_by})"
     else:
         text += ": no certified flutter mode"
     if budget.out:
         text += "; " + budget.text("searches")
     return Onset(0.0, upper, False, text, mode)
+
+
+def _mode_text(mode, damped: bool) -> str:
+    if damped:
+        lam = complex(np.sqrt(complex(mode.sigma)))
+        return f"damped flutter mode λ = {lam.real:.6g}{lam.imag:+.6g}i"
+    return f"non-real σ = {mode.sigma.real:.6g}{mode.sigma.imag:+.6g}i (|Im σ| > radius {mode.radius:.1e})"
 
 
 def _order_text(branches) -> str:

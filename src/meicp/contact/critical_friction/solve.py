@@ -6,6 +6,7 @@ per grazing case; flutter (the smallest μ with a non-real σ of the sliding pen
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 
 import numpy as np
@@ -19,7 +20,7 @@ from ...lattice.model import LatticeModel
 from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
 from ...scene import Scene
-from ..damped import refuse
+from ..damped import DampingUsed
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
 from ..problem import contact_states
@@ -31,6 +32,11 @@ from .flutter_onset import flutter_onset
 from .result import EXACT_WIDTH, CriticalFriction, Onset
 
 log = logging.getLogger("meicp")
+
+#: why the divergence onset of a damped lattice is computed as the undamped one's
+DAMPED_DIVERGENCE = ("at λ = 0 the damping drops out of y = (λ²B + λD − A)x, so the smallest μ with a λ = 0 "
+                     "mode is the undamped μ_c, computed here; damped modes born at λ > 0 below it are the "
+                     "cross-check's (the quadratic MEiCP enumerated)")
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
@@ -69,6 +75,11 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     for the default ``bisection=None``; a warning if ``bisection=False``); beyond limits.CRITICAL_J
     such a lattice is refused (the bracket needs the lattice held once the contacts are).
 
+    With damping (docs/critical-friction.md, "With damping") μ_c is the smallest μ with a
+    λ = 0 mode — where the damping drops out, the undamped μ_c — cross-checked on the
+    quadratic MEiCP, and μ_f the smallest μ with a non-real λ, Re λ > 0, its lower end an
+    interval cover of the companion form (:mod:`meicp.contact.damped_cover`).
+
     ``bisection``: cross-check of an enumerated μ_c on the σ-problem with the mass (a σ ≥ 0
     mode must exist just above μ_c and none just below, each decided by enumerating the
     whole reduced pencil; ConvergenceError if they disagree).  ``None`` (default): run it
@@ -77,12 +88,14 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     ``False``: never.  Never run for a bracket.  ``tol``: the bisection's relative width in μ
     (in (0, 0.01]).  ``mu_max``: finite, > 0.
     """
-    refuse(scene, "the critical friction")
     mu_max, tol, bisection = check_arguments(mu_max, tol, bisection)
     comm = mpi_comm(comm)
     flutter = flutter_asked(scene, flutter)
     lattice, lines = _friction_states(scene)
     divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm)
+    if scene.damped:
+        divergence = dataclasses.replace(divergence, evidence=f"{DAMPED_DIVERGENCE} "
+                                         f"({DampingUsed.of(scene).describe()}); {divergence.evidence}")
     if not flutter:
         return CriticalFriction.of(divergence, None)
     return CriticalFriction.of(divergence, flutter_onset(lattice, lines, scene, mu_max=mu_max, comm=comm,
