@@ -390,11 +390,13 @@ def test_paths_not_built_for_damping_refuse_a_damped_scene():
         meicp.analyze(free)
 
 
-def test_a_damped_scene_past_the_enumeration_limits_is_undecided_not_refused(monkeypatch):
+def test_a_damped_scene_past_the_enumeration_limits_is_decided_not_refused(monkeypatch):
+    """Past the enumeration: the damped Rayleigh bound fails here, and the undamped mode,
+    followed to the damped problem, is certified (tests/test_damped_modes.py)."""
     monkeypatch.setattr(limits, "ENUMERATE_N", 10)
     r = meicp.analyze(damped(TWO_LAYERS, eta=(0.02, 0.02)), flutter=False)
-    assert r.divergence is None and r.stable is None and not r.modes
-    assert "damped Rayleigh bound" in r.evidence and "no search for damped divergence modes" in r.evidence
+    assert r.divergence is True and r.stable is False and r.modes
+    assert "damped Rayleigh bound" in r.evidence and "residual inverse iteration" in r.evidence
 
 
 def test_damping_is_written_to_results_h5_and_the_lattice_xdmf(tmp_path):

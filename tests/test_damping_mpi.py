@@ -87,3 +87,21 @@ def test_the_damped_critical_friction_is_the_same_on_one_and_two_ranks(comm):
     assert (two.flutter.lower, two.flutter.upper) == (one.flutter.lower, one.flutter.upper)
     assert (two.divergence.lower, two.divergence.upper) == (one.divergence.lower, one.divergence.upper)
     assert comm.allgather(float(two)) == [float(two)] * comm.size
+
+
+def test_followed_damped_divergence_modes_are_the_same_on_one_and_two_ranks(comm, monkeypatch):
+    """Past the enumeration (its limit lowered on both ranks) the undamped mode of the
+    distributed pencil, followed to the damped problem (a distributed ZMUMPS factor), is the
+    same certified mode on 2 ranks as on one."""
+    from mpi4py import MPI
+
+    from meicp.core import limits
+
+    monkeypatch.setattr(limits, "ENUMERATE_N", 5)
+    scene = damped(TWO_LAYERS, eta=(0.1, 0.01))
+    two = meicp.analyze(scene, comm=comm, flutter=False)
+    one = meicp.analyze(scene, comm=MPI.COMM_SELF, flutter=False)
+    assert two.divergence is True and one.divergence is True
+    assert two.proofs[0].test == one.proofs[0].test == "quadratic-followed"
+    assert two.modes[0].sigma == pytest.approx(one.modes[0].sigma, rel=1e-10)
+    assert comm.allgather(two.modes[0].sigma) == pytest.approx([two.modes[0].sigma] * comm.size, rel=0)

@@ -45,6 +45,7 @@ from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_growth import FlutterGrowth
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
+from .damped_modes import followed_modes
 from .damped_rayleigh import damped_rayleigh_bound
 from .on_root import on_root
 
@@ -104,11 +105,12 @@ def _dense(pen) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 # -- divergence ----------------------------------------------------------------------------------
 
 
-def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) -> DivergenceVerdict:
+def damped_divergence(pen, scene, comm, method, lam_min: float, tol: float, options) -> DivergenceVerdict:
     """The divergence verdict of a damped pencil: the quadratic MEiCP enumerated (modes with
     σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Past the enumeration's
-    limits (method ``"auto"``) the damped Rayleigh bound, else undecided; ProblemError when
-    another method is asked for, or ``"enumerate"`` past its limits.  Collective."""
+    limits (method ``"auto"``) the damped Rayleigh bound, else the undamped modes followed to
+    the damped problem (:mod:`.damped_modes`), else undecided; ProblemError when another
+    method is asked for, or ``"enumerate"`` past its limits.  Collective."""
     red = pen.maps
     r, n_j = int(red.retained.size), int(red.J.size)
     if method not in (None, "auto", "enumerate"):
@@ -123,10 +125,18 @@ def damped_divergence(pen, comm, method, lam_min: float, tol: float, options) ->
         log.info("damped divergence: %s", statement)
         if proved:
             return DivergenceVerdict([], True, statement, None, DivergenceProof("damped-rayleigh", statement))
+        modes, followed = followed_modes(pen, scene, comm, tol, options)
+        if modes:
+            listed = [m for m in modes if lam_min == 0 or m.sigma >= lam_min]
+            growth = ", ".join(f"{np.sqrt(m.sigma):.6g}" for m in modes[:3])
+            text = (f"{len(modes)} certified damped divergence mode(s), growth rate λ = {growth} ({statement}; "
+                    f"{followed})")
+            return DivergenceVerdict(listed, False, text, None, DivergenceProof("quadratic-followed",
+                                                                                "certified mode(s)"))
         text = (f"undecided: damped divergence with {r} retained DOFs and {n_j} complementarity pairs is past the "
                 f"dense enumeration's limits ({limits.ENUMERATE_N} DOFs, {limits.ENUMERATE_J} pairs, 2^|J|·r³ ≤ "
-                f"{limits.ENUMERATE_FLOPS:g}); {statement}; no search for damped divergence modes at scale is built "
-                "yet (docs/damping.md)")
+                f"{limits.ENUMERATE_FLOPS:g}); {statement}; {followed}: no damped mode found, which proves nothing "
+                "(docs/damping.md)")
         return DivergenceVerdict([], None, text, None, DivergenceProof("", text))
     max_j = options.get("max_j") if method == "enumerate" else None
 

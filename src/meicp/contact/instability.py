@@ -150,7 +150,7 @@ def analyze(scene: Scene, comm=None, *, method: str | None = None, lam_min=None,
                     continue
                 t0 = time.perf_counter()
                 with stage("eigen"):
-                    verdict = (damped_divergence(pen, comm, method, lam_min, tol, solver_options) if pen.damped
+                    verdict = (damped_divergence(pen, scene, comm, method, lam_min, tol, solver_options) if pen.damped
                                else divergence_of(pen, scene, comm, method, lam_min, tol, solver_options))
                 timings["eigen"] = timings.get("eigen", 0.0) + time.perf_counter() - t0
                 if flutter and not n_grazing:  # steady sliding of this very pencil (docs/flutter.md)
