@@ -19,9 +19,10 @@ With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``),
 
 The divergence is enumerated where the enumeration's limits allow; past them the damped
 Rayleigh bound (:mod:`.damped_rayleigh`, one LDLᵀ inertia) may prove that no λ ≥ 0 exists,
-and otherwise it is *undecided* (no search for damped divergence modes at scale yet), so
-that the damped flutter search at scale (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX``
-retained DOFs) can still prove the lattice unstable.  Every other path that would leave C
+the undamped modes followed to the damped problem (:mod:`.damped_modes`) may find certified
+ones, and otherwise it is *undecided*, so that the damped flutter search at scale
+(:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX`` retained DOFs) can still prove the lattice
+unstable.  Every other path that would leave C
 out (the modal analysis, the critical friction, the window procedure, a named divergence
 method) is a ProblemError saying so (:func:`refuse`), never an undamped answer.
 """

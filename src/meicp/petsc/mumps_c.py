@@ -187,34 +187,34 @@ class _Instance:
         self.destroy()
 
 
-class ComplexFactor(_Instance):
-    """ZMUMPS LU of the complex matrix whose rows ``lo:lo + rows.shape[0]`` this rank holds
-    (``rows``: SciPy CSR with global columns), order ``n``.  ``icntl``, ``cntl``: MUMPS
-    controls by their 1-based Fortran numbers, after the defaults (quiet, AMF ordering).
-    :meth:`solve` takes and returns this rank's entries.  A context manager; ``destroy`` is
-    collective."""
+class LUFactor(_Instance):
+    """MUMPS LU (``arith`` "d": real, "z": complex) of the matrix whose rows
+    ``lo:lo + rows.shape[0]`` this rank holds (``rows``: SciPy CSR with global columns), order
+    ``n``.  ``icntl``, ``cntl``: MUMPS controls by their 1-based Fortran numbers, after the
+    defaults (quiet, AMF ordering).  :meth:`solve` takes and returns this rank's entries.  A
+    context manager; ``destroy`` is collective."""
 
-    def __init__(self, comm, rows: sp.csr_matrix, lo: int, n: int, *, icntl: dict | None = None,
-                 cntl: dict | None = None):
-        super().__init__(comm, "z", 0, {}, icntl, cntl, "complex MUMPS factor of the flutter search",
-                         "-meicp_flutter_st_mat_mumps_")
+    def __init__(self, comm, rows: sp.csr_matrix, lo: int, n: int, *, arith: str = "z", icntl: dict | None = None,
+                 cntl: dict | None = None, what: str = "MUMPS factor", option: str = "-meicp_flutter_st_mat_mumps_"):
+        super().__init__(comm, arith, 0, {}, icntl, cntl, what, option)
+        self.dtype = np.complex128 if arith == "z" else np.float64
         self.lo, self.n, self.rows = lo, n, rows.shape[0]
         coo = rows.tocoo()
         self._rows(np.ascontiguousarray(coo.row + lo + 1, dtype=np.int32),
                    np.ascontiguousarray(coo.col + 1, dtype=np.int32),
-                   np.ascontiguousarray(coo.data, dtype=np.complex128), n)
+                   np.ascontiguousarray(coo.data, dtype=self.dtype), n)
         try:
             self._run(4)  # analysis and factorisation
         except MumpsError:
             self.destroy()
             raise
         self._counts = None if comm is None else np.array(comm.allgather(self.rows))
-        self._rhs = np.zeros(n if self.host else 1, dtype=np.complex128)
+        self._rhs = np.zeros(n if self.host else 1, dtype=self.dtype)
 
     def solve(self, local: np.ndarray) -> np.ndarray:
         """This rank's entries of the solution of F x = b, b given by this rank's entries.
         Collective."""
-        local = np.ascontiguousarray(local, dtype=np.complex128)
+        local = np.ascontiguousarray(local, dtype=self.dtype)
         if self.comm is None:
             self._rhs[:] = local
         else:
@@ -224,9 +224,19 @@ class ComplexFactor(_Instance):
         self._run(3)
         if self.comm is None:
             return self._rhs.copy()
-        out = np.empty(self.rows, dtype=np.complex128)
+        out = np.empty(self.rows, dtype=self.dtype)
         self.comm.Scatterv([self._rhs, self._counts] if self.host else None, out, root=0)
         return out
+
+
+class ComplexFactor(LUFactor):
+    """ZMUMPS LU of a complex matrix (:class:`LUFactor` with ``arith`` "z"): the flutter
+    searches' factor."""
+
+    def __init__(self, comm, rows: sp.csr_matrix, lo: int, n: int, *, icntl: dict | None = None,
+                 cntl: dict | None = None):
+        super().__init__(comm, rows, lo, n, arith="z", icntl=icntl, cntl=cntl,
+                         what="complex MUMPS factor of the flutter search")
 
 
 class SchurSeries(_Instance):
