@@ -72,4 +72,4 @@ def test_without_an_undamped_mode_nothing_is_followed(monkeypatch):
     assert meicp.analyze(scene, flutter=False).divergence is False
     r = followed(scene, monkeypatch)
     assert r.divergence is None and r.stable is None
-    assert "no divergence mode to follow" in r.evidence and "proves nothing" in r.evidence
+    assert "no undamped divergence mode to follow" in r.evidence and "proves nothing" in r.evidence

@@ -1,16 +1,19 @@
 """Damped divergence modes past the enumeration, followed from the undamped ones
 (docs/damping.md, "damped divergence modes at scale").
 
-Light damping moves a divergence mode without changing its support: the undamped verdict of
-the same pencil (:func:`~meicp.contact.divergence.driver.window_verdict`, its A and B alone)
-finds modes (σ, x, S), and each is followed to the quadratic problem on the same support —
+Light damping moves a divergence mode without changing its support: the first steps of the
+undamped verdict of the same pencil (its A and B alone; :mod:`~meicp.contact.divergence.driver`
+steps 1–2: the Lanczos estimate of the window's top, then, when it is above 0, the short
+active-set search from it) find modes (σ, x, S), and each is followed to the quadratic problem on the same support —
 ``(λ²B + λD − A)_RR x_R = 0``, ``x = 0`` on ``J ∖ S`` — from ``(√σ, x)`` by residual inverse
 iteration (:func:`meicp.petsc.damped_refine.refine_real_pair`).  What it converges to is a
 damped divergence mode only when it passes the quadratic MEiCP's certificate on the whole
 reduced pencil (λ ≥ 0, x_J ≥ 0, y_J ≥ 0, complementarity, every row within
 ``tol`` of its scale: :func:`meicp.petsc.damped_refine.quadratic_certificate`).  A way to
-find modes, never a proof of absence: when the damping moves the support, or the undamped
-pencil has no mode, nothing is found and the verdict stays undecided.
+find modes, never a proof of absence: when the damping moves the support, or the short
+search finds no undamped mode, nothing is found and the verdict stays undecided.  The
+undamped verdict's proofs and its whole search are not run: they would cost condensations
+and prove nothing about the damped problem.
 """
 
 from __future__ import annotations
@@ -27,8 +30,9 @@ from ..petsc.damped_refine import quadratic_certificate, refine_real_pair
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from ..petsc.mat import mat_from_scipy
 from ..petsc.pencil import reduced_matrix
-from .divergence.driver import window_verdict
 from .divergence.modes import mode_of
+from .divergence.search import first_search, search_settings
+from .divergence.sigma_window import probe_top, ritz_estimate
 
 log = logging.getLogger("meicp")
 
@@ -43,12 +47,9 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     ``pen`` (module docstring), each a certified :class:`~meicp.contact.result.Mode` with
     σ = λ², and one sentence on what was done.  Collective."""
     t0 = time.perf_counter()
-    undamped = window_verdict(pen, scene, comm, 0.0, tol, options)
-    solutions = sorted(getattr(undamped.eicp, "solutions", None) or [], key=lambda s: -s.lam)[:FOLLOWED]
-    solutions = [s for s in solutions if s.lam >= 0]
+    solutions, searched = _undamped_modes(pen, scene, comm, tol, options)
     if not solutions:
-        return [], (f"the undamped pencil has no divergence mode to follow ({_clip(undamped.evidence)}), "
-                    f"{time.perf_counter() - t0:.1f} s")
+        return [], f"no undamped divergence mode to follow ({searched}), {time.perf_counter() - t0:.1f} s"
     red = pen.maps
     J = np.asarray(red.J, dtype=np.int64)
     C = pen.lattice.damping_in_layout()
@@ -87,8 +88,19 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     return modes, statement
 
 
-def _clip(text: str, length: int = 300) -> str:
-    return text if len(text) <= length else text[:length] + " …"
+def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
+    """The certified undamped modes (EiCP solutions, σ ≥ 0, the fastest first, at most
+    :data:`FOLLOWED`) of the short search from the window's top, and what was done."""
+    started = time.perf_counter()
+    top = probe_top(pen.A, pen.B, ritz_estimate)
+    if not top.positive:
+        return [], (f"the window's top θ = {top.theta:.6g} of (sym A, sym B) is not above 0: the undamped short "
+                    "search would start among the slow vibrations, so none was made")
+    outcome = first_search(search_settings(pen, scene, comm, 0.0, tol, options, top.shift, started))
+    solutions = sorted((s for s in getattr(outcome.eicp, "solutions", None) or [] if s.lam >= 0),
+                       key=lambda s: -s.lam)[:FOLLOWED]
+    return solutions, (f"the undamped short search from σ = {outcome.target:.6g} found "
+                       f"{len(solutions) or 'no'} mode(s)")
 
 
 __all__ = ["followed_modes"]

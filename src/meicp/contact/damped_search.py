@@ -60,11 +60,20 @@ def moved_off(lam0: complex, attempt: int) -> complex:
     return complex(np.sqrt(off_cluster(complex(lam0) ** 2, attempt)))
 
 
+#: why no target is searched when the damped proxy has no flutter
+PROXY_FREE = (f": the {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy has no flutter mode (dense "
+              "companion QZ: every eigenvalue real or decaying, a proof for the proxy, not for the lattice), so no "
+              "target is searched: guesses on a λ-line found nothing there at 10⁶ DOFs, at 15 eigen-solves' cost "
+              "(docs/benchmarks.md, \"Damping at scale\")")
+
+
 def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
     """``(λ₀ targets, why)`` for a pencil of ``n`` retained DOFs: the damped proxy's fastest
     flutter modes (λ = √σ) — a base proxy's moved up off its cluster first from
-    ``limits.FLUTTER_OFF_CLUSTER_FROM`` DOFs, as the undamped search does — else the λ-line."""
-    sigmas = proxy_targets(scene, lines, 1 if n >= limits.FLUTTER_SEARCH_LARGE else 3)
+    ``limits.FLUTTER_OFF_CLUSTER_FROM`` DOFs, as the undamped search does — none when the
+    damped proxy is proved free of flutter, else the λ-line."""
+    sigmas, proxy_flutter = proxy_targets(scene, lines, 1 if n >= limits.FLUTTER_SEARCH_LARGE else 3,
+                                          with_verdict=True)
     if sigmas:
         targets = [complex(np.sqrt(complex(s))) for s in sigmas]
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy (dense companion QZ)"
@@ -74,6 +83,10 @@ def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
                     + ", ".join(f"{t:.4g} → {m:.4g}" for t, m in zip(targets, moved)))
             targets = moved
         return targets, why
+    if proxy_flutter is False:
+        # measured at 10⁶ DOFs (μ = 0.05): three λ-line targets, each given up after 11 restarts,
+        # 376 s for nothing (docs/benchmarks.md, "Damping at scale")
+        return [], PROXY_FREE
     return [complex(LINE_GROWTH, w) for w in LINE_FREQUENCIES], LINE_WHY
 
 
@@ -93,6 +106,11 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
     why = ""
     if targets is None:
         targets, why = damped_targets(scene, pen.lines, n)
+        if not targets:
+            return PencilFlutter(None, [], f"damped: no target searched{why}" + search_conclusion([]),
+                                 counts={"targets": 0},
+                                 growth=search_growth([], "the damped search computes only the eigenvalues near its "
+                                                          "targets, and had none"))
     lattice = pen.lattice
     C = lattice.damping_in_layout()
     D = None

@@ -129,14 +129,16 @@ def _proxy_of(scene, lines):
     return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
 
 
-def proxy_targets(scene, lines, count: int = SEARCH_TARGETS) -> list[complex]:
+def proxy_targets(scene, lines, count: int = SEARCH_TARGETS, *, with_verdict: bool = False):
     """Up to ``count`` targets: σ of the proxy's fastest contact-localised flutter modes, at
     least 0.1|σ| apart (all its modes when none is localised); [] without a proxy.  ``lines``:
     the scene's contact lines with their states resolved (a pencil's ``lines``).  A damped
-    scene's proxy is damped too: its modes are those of its quadratic pencil (σ = λ²)."""
+    scene's proxy is damped too: its modes are those of its quadratic pencil (σ = λ²).
+    ``with_verdict``: ``(targets, flutter)``, flutter the proxy's own dense verdict (None
+    also without a proxy)."""
     proxy, near = _proxy_of(scene, lines)
     if proxy is None:
-        return []
+        return ([], None) if with_verdict else []
     with pencil(proxy) as pen:  # a lattice of its own, PROXY_NX × PROXY_ROWS, serial
         red = pen.maps
         if pen.A is None:
@@ -157,4 +159,4 @@ def proxy_targets(scene, lines, count: int = SEARCH_TARGETS) -> list[complex]:
             targets.append(m.sigma)
         if len(targets) == count:
             break
-    return targets
+    return (targets, found.flutter) if with_verdict else targets
