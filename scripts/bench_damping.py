@@ -25,8 +25,8 @@ shipped 10⁶-DOF scene file of ``--scenes`` (``stem@μ``: at friction μ) with 
 ``--eta`` in every layer and its ``[solver]`` table left out (written to a temporary directory), ``meicp solve --json`` on it and, side by side under the same
 lock, one SLEPc eigen-solve of the *undamped* pencil of the same lattice
 (``bench_scenes.py eigensolve``) — the issue's reference.  Past the dense enumeration the
-damped divergence is the damped Rayleigh bound's (a proof) or undecided (no search for its
-modes at scale yet); the row says that, what the damped flutter search at scale
+damped divergence is the damped Rayleigh bound's (a proof), a followed undamped mode's (a
+certified mode) or undecided; the row says that, what the damped flutter search at scale
 (docs/damping.md) found, and what it cost.
 """
 
@@ -233,7 +233,8 @@ def scale_chart(args) -> None:
                                      + f"\nη = {r['eta']}, {int(r['dofs']):,} DOFs, {r['ranks']} ranks"
                                      for r in rows], fontsize=7)
     ax.set_xlabel("wall seconds (meicp solve)")
-    ax.set_title("Damped verdict at scale: damped Rayleigh bound and flutter search", fontsize=9)
+    ax.set_title("Damped verdict at scale: damped Rayleigh bound, followed divergence modes, flutter search",
+                 fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2)
     ax.set_xlim(0, 2.2 * max(float(r["solve_s"]) for r in rows))
     save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
