@@ -41,14 +41,14 @@ two proofs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sl
 import scipy.sparse as sp
 
 from ..eicp.quadratic import Scaling
-from .flutter_cover import PAIR_BLOCK, U, CoverStep, Disks
+from .flutter_cover import PAIR_BLOCK, U, CoverStep, Disks, PencilFamily
 
 #: companion forms up to this order are also tried with disks scaled one at a time (dense,
 #: order² memory and work per trial Δ)
@@ -58,34 +58,23 @@ DOUBLINGS, BISECTIONS = 40, 8
 
 
 @dataclass(frozen=True)
-class QuadraticFamily:
+class QuadraticFamily(PencilFamily):
     """``λ²(B₀ + μB₁) + λ(D₀ + μD₁) − (A₀ + μA₁)`` (SciPy CSR, order r): one damped sliding
-    pencil as μ varies, with the ``maps`` it was reduced with and its grazing ``branch``
-    label, as :class:`~meicp.contact.flutter_cover.PencilFamily` for the undamped one."""
+    pencil as μ varies — :class:`~meicp.contact.flutter_cover.PencilFamily` with the damping's
+    ``D₀``, ``D₁`` (keywords); :meth:`at` gives ``(A, B, D)``."""
 
-    A0: sp.csr_matrix
-    A1: sp.csr_matrix
-    B0: sp.csr_matrix
-    B1: sp.csr_matrix
-    D0: sp.csr_matrix
-    D1: sp.csr_matrix
-    maps: object = None
-    branch: str = ""
+    D0: sp.csr_matrix = field(default=None, kw_only=True)
+    D1: sp.csr_matrix = field(default=None, kw_only=True)
     #: why a cover may not start at μ = 0 (the onset's evidence)
     at_zero = "an eigenvalue on or near the imaginary axis (a mode the damping does not reach) may grow at any μ > 0"
 
     @property
-    def order(self) -> int:
-        return self.A0.shape[0]
-
-    @property
     def depends_on_mu(self) -> bool:
-        return bool(self.A1.count_nonzero() or self.B1.count_nonzero() or self.D1.count_nonzero())
+        return super().depends_on_mu or bool(self.D1.count_nonzero())
 
     def at(self, mu: float) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
         """The pencil ``(A(μ), B(μ), D(μ))``."""
-        return ((self.A0 + mu * self.A1).tocsr(), (self.B0 + mu * self.B1).tocsr(),
-                (self.D0 + mu * self.D1).tocsr())
+        return (*super().at(mu), (self.D0 + mu * self.D1).tocsr())
 
     def companion(self, scaling: Scaling):
         """``(L₀₀, L₀₁, L₁₀, L₁₁)`` with ``L₀(μ) = L₀₀ + μL₀₁``, ``L₁(μ) = L₁₀ + μL₁₁`` the first
@@ -124,12 +113,9 @@ def damped_cover_step(family: QuadraticFamily, mu: float) -> CoverStep:
     scaling = Scaling.of(A.toarray(), B.toarray())
     L00, L01, L10, L11 = family.companion(scaling)
     L1 = (L10 + mu * L11).tocsr()
-    d = B.diagonal()
-    B_diagonal = (not family.B1.count_nonzero() and bool(np.all(d > 0))
-                  and family.B0.count_nonzero() == np.count_nonzero(d))
     try:
         with np.errstate(all="ignore"):
-            found, why = _eigen((L00 + mu * L01).tocsr(), L1, B_diagonal)
+            found, why = _eigen((L00 + mu * L01).tocsr(), L1, family.diagonal)
     except (np.linalg.LinAlgError, ValueError) as exc:
         return CoverStep(mu, 0.0, True, 0.0, f"the dense eigen-solve failed ({exc})")
     if found is None:

@@ -105,8 +105,8 @@ def sliding_families(lattice, lines) -> list[Branch]:
         if C is None:
             family = PencilFamily(A0, A1, B0, B1, red, label)
         else:
-            family = QuadraticFamily(A0, A1, B0, B1, (red.P0 @ C @ red.Q).tocsr(), (red.P1 @ C @ red.Q).tocsr(),
-                                     red, label)
+            family = QuadraticFamily(A0, A1, B0, B1, red, label, D0=(red.P0 @ C @ red.Q).tocsr(),
+                                     D1=(red.P1 @ C @ red.Q).tocsr())
         out.append(Branch(label, list(branch), family))
     return out
 
