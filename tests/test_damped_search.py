@@ -5,6 +5,7 @@ the dense fastest), its pairs re-checked on Q built independently, and what it n
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import meicp
 from meicp.contact.damped import damping_matrix
@@ -35,7 +36,7 @@ def test_the_search_finds_the_dense_fastest_damped_modes(name):
     assert search.flutter is True and search.stable is False
     assert search.divergence is dense.divergence or search.divergence is None
     assert "companion form" in search.flutter_evidence and "not a proof" in search.flutter_evidence
-    assert search.flutter_growth.upper is None and not search.flutter_growth.exact
+    assert search.flutter_growth.loose and not search.flutter_growth.exact  # the ceiling: proved, far above
     lam_dense = np.array([np.sqrt(m.sigma) for m in dense.flutter_modes])
     for mode in search.flutter_modes:  # every certified mode is an eigenvalue of the pencil
         lam = np.sqrt(mode.sigma)
@@ -205,3 +206,40 @@ def test_no_target_is_searched_where_the_damped_proxy_has_no_flutter():
     assert dense.flutter is False  # the lattice itself has none: nothing was missed here
     assert r.flutter is None and "no target searched" in r.flutter_evidence
     assert "a proof for the proxy, not for the lattice" in r.flutter_evidence
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_the_growth_ceiling_bounds_the_whole_damped_spectrum(name):
+    """Past the dense limit the bracket's upper end is the Bendixson-type ceiling: finite,
+    loose, and above every eigenvalue's Re λ of the dense companion spectrum."""
+    scene = SCENES[name]
+    r = meicp.analyze(scene, flutter_dense_max=10)
+    g = r.flutter_growth
+    assert g.upper is not None and g.loose and not g.exact and "a proof" in g.evidence
+    with pencil(scene) as pen:
+        spec = quadratic_spectrum(pen.A.toarray(), pen.B.toarray(), damping_matrix(pen).toarray())
+    assert np.max(spec.lam.real) <= g.upper
+    assert g.lower <= g.upper
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(2, 8))
+def test_quadratic_ceiling_bounds_random_pencils(seed, n):
+    """λ²B + λD − A with B diagonal positive and A, D arbitrary: the ceiling from the exact
+    field-of-values ratios (eigenvalues of the scaled symmetric and skew parts) is above every
+    eigenvalue's real part."""
+    from meicp.contact.flutter_growth import quadratic_ceiling
+
+    rng = np.random.default_rng(seed)
+    b = rng.uniform(0.5, 2.0, n)
+    A, D = rng.normal(size=(n, n)) * rng.uniform(0.1, 3), rng.normal(size=(n, n)) * rng.uniform(0.01, 1)
+    s = 1 / np.sqrt(b)
+    scaled = lambda M: s[:, None] * M * s[None, :]
+    sym = lambda M: 0.5 * (M + M.T)
+    skew = lambda M: 0.5 * (M - M.T)
+    gamma = np.linalg.eigvalsh(sym(scaled(A)))[-1]
+    beta = np.max(np.abs(np.linalg.eigvals(skew(scaled(A)))), initial=0.0)
+    nu = max(0.0, -np.linalg.eigvalsh(sym(scaled(D)))[0])
+    delta = np.max(np.abs(np.linalg.eigvals(skew(scaled(D)))), initial=0.0)
+    spec = quadratic_spectrum(A, np.diag(b), D)
+    assert np.max(spec.lam.real) <= quadratic_ceiling(gamma, beta, nu, delta) * (1 + 1e-9) + 1e-12

@@ -22,11 +22,12 @@ import numpy as np
 from ..core import limits
 from ..core.comm import mpi_comm
 from ..core.matrix import is_petsc_mat
+from ..petsc.flutter import SlidingPencilOps
 from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
 from ..petsc.mat import mat_from_scipy
 from ..petsc.pencil import reduced_matrix
 from .flutter_dense import _fastest_first, _normalise
-from .flutter_growth import search_growth
+from .flutter_growth import quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
                             off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
@@ -130,15 +131,32 @@ def _search(pen, D, targets, why: str, **solve) -> PencilFlutter:
     if own:  # a serial SciPy pencil: PETSc Mats of its own for the search
         A, B, D = (mat_from_scipy(pen.comm, M) for M in (A, B, D))
     try:
+        ceiling = growth_ceiling(A, B, D)
         with QuadraticPencilOps(A, B, D) as ops:
-            return _at_targets(ops, targets, why, **solve)
+            return _at_targets(ops, targets, why, ceiling, **solve)
     finally:
         if own:
             for M in (A, B, D):
                 M.destroy()
 
 
-def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFlutter:
+def growth_ceiling(A, B, D) -> tuple[float, str] | None:
+    """``(upper, how)``: no eigenvalue of ``λ²B + λD − A`` grows faster than ``upper``
+    (:func:`~meicp.contact.flutter_growth.quadratic_ceiling` on Gershgorin's and the
+    skew-part bounds of A and D scaled by B), or None when B is not diagonal.  Collective."""
+    with SlidingPencilOps(A, B) as on_a, SlidingPencilOps(D, B) as on_d:
+        gamma, beta = on_a.real_part_bound(), on_a.skew_bound()
+        if gamma is None or beta is None:
+            return None
+        low, delta = on_d.lowest_real_part(), on_d.skew_bound()
+    nu = max(0.0, -low)
+    upper = quadratic_ceiling(gamma, beta, nu, delta)
+    return upper, (f"for every eigenvector, Re xᴴAx/xᴴBx ≤ {gamma:.4g} and |Im| ≤ {beta:.4g}, Re xᴴDx/xᴴBx ≥ "
+                   f"{-nu:.4g} and |Im| ≤ {delta:.4g} (Gershgorin's discs and the skew-part bounds, B diagonal), so "
+                   "λ² + dλ − a = 0 bounds Re λ")
+
+
+def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solve) -> PencilFlutter:
     modes, rejected, disks, borderline, moved = [], [], [], 0, []
     for lam0 in targets:
         lam0 = complex(lam0)
@@ -178,7 +196,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, **solve) -> PencilFl
                 f"{why}{off}: the eigenvalues SLEPc converged in {text}"
                 + (f"; {len(rejected)} pair(s) failed the residual gate {RESIDUAL_TOL:g}" if rejected else ""))
     evidence += search_conclusion(modes)
-    growth = search_growth(modes, "the damped search computes only the eigenvalues near its targets "
-                                  "(no bound on the whole quadratic spectrum yet)")
+    growth = search_growth(modes, "the damped search computes only the eigenvalues near its targets",
+                           ceiling=ceiling)
     return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts, rejected=rejected,
                          growth=growth)

@@ -123,13 +123,20 @@ def rectangle_growth(real_max: float, imag_max: float) -> float:
     return math.sqrt(max(0.0, 0.5 * (math.hypot(x, y) + x))) * (1 + _SLACK)
 
 
-def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None) -> FlutterGrowth:
+def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None,
+                  ceiling: tuple | None = None) -> FlutterGrowth:
     """The bracket of a search that computed part of the spectrum: the fastest certified
     mode below; above, when ``rectangle`` = ``(real_max, imag_max, how)`` bounds every
     eigenvalue (Bendixson: a certified Re σ ≤ real_max and |Im σ| ≤ imag_max), the growth at
-    its corner (:func:`rectangle_growth`), a proof however loose; else no upper bound."""
+    its corner (:func:`rectangle_growth`), or ``ceiling`` = ``(upper, how)`` a proved bound on
+    every eigenvalue's growth (:func:`quadratic_ceiling`), a proof however loose; else no
+    upper bound."""
     lower = _certified_lower(modes)
     text = f"the fastest certified mode found grows at least {lower:.6g}; "
+    if ceiling is not None and math.isfinite(ceiling[0]):
+        upper = max(float(ceiling[0]), lower)
+        return FlutterGrowth(float(lower), upper, loose=True, evidence=text + (
+            f"no eigenvalue grows faster than {upper:.6g} ({ceiling[1]}; a proof; {why_no_bound})"))
     corner = math.inf if rectangle is None else rectangle_growth(*rectangle[:2])
     if not math.isfinite(corner):
         return FlutterGrowth(float(lower), None, text + f"no upper bound: {why_no_bound}")
@@ -138,6 +145,38 @@ def search_growth(modes: list, why_no_bound: str, rectangle: tuple | None = None
     return FlutterGrowth(float(lower), float(upper), loose=True, evidence=text + (
         f"every eigenvalue has Re σ ≤ {real_max:.6g} ({how}) and |Im σ| ≤ {imag_max:.6g} (skew-part bound), "
         f"so none grows faster than {upper:.6g} (Bendixson's rectangle, a proof; {why_no_bound})"))
+
+
+def quadratic_ceiling(gamma: float, beta: float, nu: float, delta: float) -> float:
+    """The largest growth u = Re λ of any eigenvalue of ``λ²B + λD − A`` (B ≻ 0) whose
+    field-of-values ratios, for its eigenvector x, satisfy ``Re a ≤ γ``, ``|Im a| ≤ β``,
+    ``Re d ≥ −ν``, ``|Im d| ≤ δ`` (a = xᴴAx/xᴴBx, d = xᴴDx/xᴴBx; ν, β, δ ≥ 0).
+
+    ``xᴴQ(λ)x = 0`` is ``λ² + dλ − a = 0``; with λ = u + iv its imaginary part gives
+    ``v(2u + Re d) = Im a − (Im d)u``, so for u > ν/2, ``|v| ≤ V(u) = (β + δu)/(2u − ν)``, and its
+    real part ``u² + (Re d)u − Re a = v² + (Im d)v`` gives ``f(u) = u² − νu − γ − V² − δV ≤ 0``.
+    On (ν/2, ∞) the first terms grow and V falls (V′ = −(δν + 2β)/(2u − ν)² ≤ 0), so f grows:
+    every eigenvalue has u ≤ max(ν/2, the root of f), found by bisection and returned rounded
+    up.  A Bendixson-type bound: proved, and far above the fastest mode."""
+    nu, beta, delta = max(nu, 0.0), abs(beta), abs(delta)
+    floor = 0.5 * nu
+
+    def f(u: float) -> float:
+        v = (beta + delta * u) / (2 * u - nu)
+        return u * u - nu * u - gamma - v * v - delta * v
+
+    hi = max(nu, 1.0)
+    while f(hi) <= 0:
+        hi *= 2
+        if hi > 1e300:
+            return math.inf
+    lo = floor
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi:
+            break
+        lo, hi = (mid, hi) if (mid <= floor or f(mid) <= 0) else (lo, mid)
+    return max(floor, hi) * (1 + 1e-12)
 
 
 def _certified_lower(modes: list) -> float:

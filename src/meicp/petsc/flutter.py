@@ -196,11 +196,21 @@ class SlidingPencilOps(PencilWork):
         yᴴS y/(yᴴy) with y = D^{1/2}x and S = D^{-1/2}·sym(A)·D^{-1/2}, so Re σ ≤ λ_max(S),
         bounded by Gershgorin's discs (one pass over the rows, with a slack of a few units of
         rounding per entry).  None when B is not diagonal.  Collective."""
+        return self._gershgorin(1.0)
+
+    def lowest_real_part(self) -> float | None:
+        """The other end: ≤ λ_min(S), every Re xᴴAx / xᴴBx above it (Gershgorin, as
+        :meth:`real_part_bound`).  None when B is not diagonal.  Collective."""
+        top = self._gershgorin(-1.0)
+        return None if top is None else -top
+
+    def _gershgorin(self, side: float) -> float | None:
+        """Gershgorin's bound on λ_max(side·S) (side ±1), S as in :meth:`real_part_bound`."""
         scaled = self._scaled(1.0)
         if scaled is None:
             return None
         lo, S = scaled
-        diag = S.diagonal(k=lo)
+        diag = side * S.diagonal(k=lo)
         radius = np.asarray(abs(S).sum(axis=1)).ravel() - np.abs(diag)
         slack = 4 * np.finfo(float).eps * (np.diff(S.indptr) + 2) * (np.abs(diag) + radius)
         local = float((diag + radius + slack).max()) if diag.size else -np.inf
