@@ -110,16 +110,24 @@ def test_the_divergence_onset_is_the_undamped_one_and_says_why():
 
 
 def test_an_undamped_mode_leaves_the_cover_at_zero():
-    """η = 0 in both layers but a mass term of zero: no damping reaches the modes, their λ sit
-    on the imaginary axis — the cover proves nothing from μ = 0 and the bracket says so."""
-    s = damped(TWO_LAYERS, eta=(0.0, 0.05))  # the upper layer only: base-layer modes barely damped
-    fam = family_of(s)
+    """D with a null vector that is a mode of the symmetric pencil: that mode's λ = ±i sits on
+    the imaginary axis at μ = 0, where the skew coupling may push it right at once — the
+    cover proves nothing there, and the onset's lower end stays 0, saying why."""
+    import scipy.sparse as sp
+
+    from meicp.contact.critical_friction.flutter_onset import dense_onset
+
+    csr = lambda M: sp.csr_matrix(np.asarray(M, dtype=float))
+    fam = QuadraticFamily(csr(-np.diag([1.0, 4.0])), csr([[0, 1], [-1, 0]]), csr(np.eye(2)), csr(np.zeros((2, 2))),
+                          D0=csr(np.diag([0.0, 0.1])), D1=csr(np.zeros((2, 2))))
     step = damped_cover_step(fam, 0.0)
-    assert step.radius >= 0  # decided either way; what matters is the onset below
-    mu = meicp.critical_friction(s)
-    assert mu.flutter.lower <= mu.flutter.upper
-    if not mu.flutter.exact:
-        assert "undecided" in mu.flutter.evidence or "budget" in mu.flutter.evidence
+    assert step.radius == 0 and "imaginary axis" in step.why
+    assert damped_cover_step(fam, 0.5).radius == 0 or growing_non_real(fam, 0.5) < 0
+    onset = dense_onset([fam], 1.0, 10.0)
+    assert onset.lower == 0 and "a mode the damping does not reach" in onset.evidence
+    # with the mode damped too the cover starts: the same coupling, D positive definite
+    damped_too = QuadraticFamily(fam.A0, fam.A1, fam.B0, fam.B1, D0=csr(np.diag([0.05, 0.1])), D1=fam.D1)
+    assert damped_cover_step(damped_too, 0.0).radius > 0
 
 
 def test_past_the_dense_limit_the_damped_search_gives_the_upper_end(monkeypatch):
