@@ -73,3 +73,12 @@ def test_without_an_undamped_mode_nothing_is_followed(monkeypatch):
     r = followed(scene, monkeypatch)
     assert r.divergence is None and r.stable is None
     assert "no undamped divergence mode to follow" in r.evidence and "proves nothing" in r.evidence
+
+
+def test_real_roots_keep_a_double_root_perturbed_by_rounding():
+    from meicp.petsc.damped_refine import _real_roots
+
+    assert sorted(_real_roots(1.0, -3.0, 2.0)) == pytest.approx([1.0, 2.0])
+    assert _real_roots(1.0, -2.0, 1.0 + 1e-15) == pytest.approx([1.0, 1.0])  # negative discriminant by rounding
+    assert _real_roots(1.0, 0.0, 1.0) == []  # a true complex pair
+    assert _real_roots(0.0, 2.0, -1.0) == [0.5]

@@ -88,6 +88,14 @@ class QuadraticFamily(PencilFamily):
         return L00, L01, L10, L11
 
 
+def _exact_scaling(sc: Scaling) -> Scaling:
+    """``sc`` rounded to powers of two (s = 2^k, a = 2^m, b = a·s², d = a·s): the scaled
+    companion form is then the assembled pencil's exactly, so the cover proves something of
+    the assembled pencil and not of one within rounding of it."""
+    s, a = 2.0 ** round(np.log2(sc.s)), 2.0 ** round(np.log2(sc.a))
+    return Scaling(s, a * s * s, a * s, a)
+
+
 def _eigen(L0, L1, B_diagonal: bool):
     """Eigenvalues and right eigenvectors of the companion pair (dense, complex), or
     ``(None, why)`` when one is infinite or undefined."""
@@ -110,7 +118,7 @@ def damped_cover_step(family: QuadraticFamily, mu: float) -> CoverStep:
     if n == 0:
         return CoverStep(mu, np.inf, True, np.inf)
     A, B, _ = family.at(mu)
-    scaling = Scaling.of(A.toarray(), B.toarray())
+    scaling = _exact_scaling(Scaling.of(A.toarray(), B.toarray()))
     L00, L01, L10, L11 = family.companion(scaling)
     L1 = (L10 + mu * L11).tocsr()
     try:
@@ -237,8 +245,8 @@ def _scaled_proof(disks: Disks, delta: float) -> bool:
     for i in np.flatnonzero(~left):  # alone with its mirror image: real
         mirror = np.abs(lam[i].conjugate() - lam) - delta * np.abs(drift[i].conjugate() - drift) * (1 + 8 * U)
         mirror[i] = np.inf
-        if np.any(mirror - (radius[i] + radius) * (1 + 8 * U) <= 0):
-            return False
+        if not np.all(mirror - (radius[i] + radius) * (1 + 8 * U) - 8 * U * np.abs(lam[i]) > 0):
+            return False  # NaN included
     return True
 
 

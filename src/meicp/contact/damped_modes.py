@@ -27,6 +27,7 @@ import numpy as np
 from ..core.comm import mpi_comm
 from ..core.matrix import is_petsc_mat
 from ..petsc.damped_refine import quadratic_certificate, refine_real_pair
+from ..petsc.mumps_c import MumpsError
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from ..petsc.mat import mat_from_scipy
 from ..petsc.pencil import reduced_matrix
@@ -38,8 +39,13 @@ log = logging.getLogger("meicp")
 
 #: undamped modes followed, the fastest first
 FOLLOWED = 3
-#: the certificate a followed mode must pass (the quadratic MEiCP's row-wise residual)
+#: the certificate a followed mode must pass (the quadratic MEiCP's row-wise residual): 10×
+#: the dense enumeration's 1e-10, as the undamped critical friction's lifted mode (1e-9) — at
+#: 10⁶ DOFs the followed mode's rows land at 2.2e-10 (docs/benchmarks.md, "Damping at scale")
 CERTIFICATE_TOL = 1e-9
+#: two followed modes whose σ agree to this relative tolerance are one (two undamped modes can
+#: lead to the same damped one)
+SAME = 1e-8
 
 
 def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
@@ -64,7 +70,12 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
         with QuadraticPencilOps(A, B, D) as ops:
             for sol in solutions:
                 out = np.setdiff1d(J, np.asarray(sol.support, dtype=np.int64))
-                lam, x, info = refine_real_pair(ops, float(np.sqrt(sol.lam)), np.asarray(sol.x, dtype=float), out)
+                try:
+                    lam, x, info = refine_real_pair(ops, float(np.sqrt(sol.lam)), np.asarray(sol.x, dtype=float),
+                                                    out)
+                except MumpsError as exc:  # T(√σ) singular on the support: nothing to follow from here
+                    notes.append(f"σ = {sol.lam:.6g}: {exc}")
+                    continue
                 if not info["converged"]:
                     notes.append(f"σ = {sol.lam:.6g}: {info['why']}")
                     continue
@@ -73,6 +84,9 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
                 if lam < 0 or res > CERTIFICATE_TOL:
                     why = "λ < 0" if lam < 0 else f"{worst} {parts[worst]:.1e} > {CERTIFICATE_TOL:g}"
                     notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} on its support, not a mode ({why})")
+                    continue
+                if any(abs(lam * lam - m.sigma) <= SAME * max(lam * lam, 1e-300) for m in modes):
+                    notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}, a mode already found")
                     continue
                 modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=x, support=support, residual=res), red))
                 notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified "

@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..lattice.assembly import mass_matrix_scipy
+from .maps import reduced_system
 from .rayleigh import rayleigh_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
@@ -48,6 +49,32 @@ def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, 
     slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
     return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
                                                  "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+
+
+def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e-4) -> float:
+    """The largest m ≤ ``upper`` (to ``rel``) with no damped divergence mode, any λ ≥ 0, at any
+    μ in [0, m], every contact at the same μ, for one grazing ``case``; 0 when nothing is
+    proved.  ``f(μ) = sym(A(μ)) + (ν(μ)²/4)·B`` is convex in μ — A(μ) affine, ν(μ) = μ·ν₁ + s
+    (the friction rows' part scales with μ, the slack does not) and B ⪰ 0 — so f(0) ≺ 0 and
+    f(m) ≺ 0 (the bound at both ends) give f ≺ 0 on [0, m].  Bisection on m.  SciPy lattices
+    (the critical friction's); every rank alike."""
+    from .problem import pencil_of
+
+    red = reduced_system(lattice.model, lines, case)
+
+    def proved(mu: float) -> bool:
+        pen = pencil_of(lattice, lines, case, maps=red.with_friction(mu))
+        return pen.A is None or damped_rayleigh_bound(pen)[0]
+
+    if not np.isfinite(upper) or not proved(0.0):
+        return 0.0
+    if proved(upper):
+        return upper
+    lo, hi = 0.0, upper
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if proved(mid) else (lo, mid)
+    return lo
 
 
 def damped_rayleigh_bound(pen) -> tuple[bool, str]:

@@ -166,7 +166,7 @@ def quadratic_ceiling(gamma: float, beta: float, nu: float, delta: float) -> flo
         return u * u - nu * u - gamma - v * v - delta * v
 
     hi = max(nu, 1.0)
-    while f(hi) <= 0:
+    while not f(hi) > 0:  # NaN (β near overflow) included: no bound then
         hi *= 2
         if hi > 1e300:
             return math.inf
@@ -175,7 +175,7 @@ def quadratic_ceiling(gamma: float, beta: float, nu: float, delta: float) -> flo
         mid = 0.5 * (lo + hi)
         if mid <= lo or mid >= hi:
             break
-        lo, hi = (mid, hi) if (mid <= floor or f(mid) <= 0) else (lo, mid)
+        lo, hi = (mid, hi) if (mid <= floor or not f(mid) > 0) else (lo, mid)  # NaN: not proved, go up
     return max(floor, hi) * (1 + 1e-12)
 
 

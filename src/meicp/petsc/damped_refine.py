@@ -44,6 +44,21 @@ def _allsum(comm, *values) -> np.ndarray:
     return _allreduce(comm, np.array(values, dtype=float))
 
 
+def _real_roots(a: float, b: float, c: float) -> list[float]:
+    """The real roots of ``a·λ² + b·λ + c``; a discriminant negative within rounding counts
+    as 0 (a double root near λ = 0 under light damping would otherwise come out complex)."""
+    if a == 0:
+        return [-c / b] if b != 0 else []
+    disc = b * b - 4 * a * c
+    if disc < 0:
+        if -disc > 1e-12 * (b * b + 4 * abs(a * c)):
+            return []
+        disc = 0.0
+    root = np.sqrt(disc)
+    q = -0.5 * (b + np.copysign(root, b))  # the stable pair: q/a and c/q
+    return [q / a] + ([c / q] if q != 0 else [])
+
+
 def _restricted(rows: sp.csr_matrix, lo: int, out: np.ndarray) -> sp.csr_matrix:
     """``rows`` (this rank's, global columns) with the rows and columns of ``out`` (global,
     sorted) replaced by those of the identity."""
@@ -91,8 +106,7 @@ def refine_real_pair(ops: QuadraticPencilOps, lam0: float, x0: np.ndarray, out: 
             Ax, Bx, Dx = (restrict(ops.times(M, x)) for M in (ops.A, ops.B, ops.D))
             a, b, d = (factor.solve(v) for v in (Ax, Bx, Dx))
             ca, cb, cd = _allsum(comm, np.dot(w, a), np.dot(w, b), np.dot(w, d))
-            roots = np.roots([cb, cd, -ca]) if cb != 0 else np.array([ca / cd]) if cd != 0 else np.array([])
-            real = [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) <= 1e-12 * max(1.0, abs(r))]
+            real = _real_roots(cb, cd, -ca)
             info["iterations"] = k
             if not real:
                 info["why"] = f"the scalar equation has no real root at step {k}: the mode left the real axis"

@@ -49,21 +49,29 @@ def largest_sigma(lattice, lines, mu) -> float | None:
     return best
 
 
-def check_by_bisection(lattice, lines, mu_c, mu_max, tol) -> str:
+def check_by_bisection(lattice, lines, mu_c, mu_max, tol) -> tuple[str, float | None]:
     """Existence of a σ ≥ 0 mode against μ_c: one just above it, and where modes exist below
     it (or, without μ_c, at ``mu_max``) they must start at σ > 0 — a pair born there, not a
-    σ = 0 crossing that μ as an eigenvalue missed.  Returns a note for the evidence ("" when
-    modes start at μ_c); ConvergenceError on a contradiction."""
+    σ = 0 crossing that μ as an eigenvalue missed.  Returns ``(note, start)``: a note for the
+    evidence ("" when modes start at μ_c) and the μ where the modes found below start (a μ
+    with a certified mode; None when none was found below).  With damping a mode must exist
+    on one side of μ_c at least (the λ = 0 mode moves to one).  ConvergenceError on a
+    contradiction."""
     def sigma_at(mu):
         return largest_sigma(lattice, lines, mu)
 
+    damped = lattice.model.damped
     top = mu_c * (1 - 1e-6) - 1e-12 if np.isfinite(mu_c) else mu_max
-    if np.isfinite(mu_c) and not lattice.model.damped and sigma_at(mu_c * (1 + 1e-6) + 1e-12) is None:
+    above = sigma_at(mu_c * (1 + 1e-6) + 1e-12) if np.isfinite(mu_c) else None
+    if np.isfinite(mu_c) and not damped and above is None:
         raise ConvergenceError(f"no σ ≥ 0 mode just above μ_c = {mu_c:.8g}: μ as an eigenvalue and "
                                "existence disagree")
     sigma = None if top < 0 else sigma_at(top)
     if sigma is None:
-        return ""
+        if damped and np.isfinite(mu_c) and above is None:
+            raise ConvergenceError(f"no damped divergence mode on either side of μ_c = {mu_c:.8g}, where a λ = 0 "
+                                   "mode is certified: μ as an eigenvalue and existence disagree")
+        return "", None
     start, at_zero = 0.0, sigma_at(0.0)
     if at_zero is not None:
         sigma = at_zero
@@ -80,6 +88,6 @@ def check_by_bisection(lattice, lines, mu_c, mu_max, tol) -> str:
                                "μ as an eigenvalue missed")
     if start == 0.0:  # without friction the pencil is symmetric: unstable already, no crossing involved
         return (f"; divergence modes exist {where} already at μ = 0 (σ = {sigma:.3g}·max|A|/max|B|; enumeration "
-                "of the σ-problem)")
+                "of the σ-problem)"), 0.0
     return (f"; divergence modes exist {where}, from μ ≈ {start:.8g}, born at σ = {sigma:.3g}·max|A|/max|B| > 0 "
-            "(a pair of real σ, not through σ = 0; enumeration of the σ-problem)")
+            "(a pair of real σ, not through σ = 0; enumeration of the σ-problem)"), start

@@ -21,6 +21,7 @@ from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
 from ...scene import Scene
 from ..damped import DampingUsed
+from ..damped_rayleigh import divergence_free_up_to
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
 from ..problem import contact_states
@@ -131,9 +132,9 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm) -> Onset:
                                "eliminated (not compatible with the slip directions), so the enumeration meets "
                                "singular pencils and needs the bisection check, but the σ-problem is too large to "
                                "enumerate; pass bisection=True to run it anyway, or hold the body")
-        note = ""
+        note, born = "", None
         if bisection or (bisection is None and small):
-            note = check_by_bisection(lattice, lines, upper, mu_max, tol)
+            note, born = check_by_bisection(lattice, lines, upper, mu_max, tol)
         elif singular:
             log.warning("critical_friction: singular μ-independent block and bisection=False: μ_c = %.10g is "
                         "certified but its minimality is not cross-checked", upper)
@@ -143,6 +144,16 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm) -> Onset:
         text = ("every support of the condensed EiCP in μ enumerated" +
                 (f": no σ = 0 mode up to μ = {mu_max:g}" if not np.isfinite(upper) else
                  ", the smallest μ certified on the whole reduced lattice") + note)
+        if born is not None and lattice.model.damped:
+            # damped modes below the λ = 0 onset (ξᵀDx < 0 moves the λ = 0 mode below μ_c): the
+            # divergence starts where they do, found by sampling μ; below, only the damped
+            # Rayleigh bound, convex in μ, proves anything
+            top = min(upper, born)
+            floor = min(divergence_free_up_to(lattice, lines, case, top) for case in grazing_cases(lines))
+            return Onset(floor, top, top - floor <= EXACT_WIDTH * top,
+                         text + f"; with damping these modes are divergence too: it starts at μ ≤ {top:.8g}; no damped "
+                                f"divergence mode of any λ ≥ 0 for μ in [0, {floor:.8g}] (the damped Rayleigh bound "
+                                "at both ends, convex in μ: a proof)")
         return Onset(lower, upper, True, text)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
     return Onset(min(lower, upper), upper, exact, "; ".join(evidence))
