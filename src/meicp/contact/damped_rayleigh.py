@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from ..lattice.assembly import mass_matrix_scipy
 from .maps import reduced_system
+from .problem import pencil_of
 from .rayleigh import rayleigh_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
@@ -58,8 +59,6 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     (the friction rows' part scales with μ, the slack does not) and B ⪰ 0 — so f(0) ≺ 0 and
     f(m) ≺ 0 (the bound at both ends) give f ≺ 0 on [0, m].  Bisection on m.  SciPy lattices
     (the critical friction's); every rank alike."""
-    from .problem import pencil_of
-
     red = reduced_system(lattice.model, lines, case)
 
     def proved(mu: float) -> bool:
