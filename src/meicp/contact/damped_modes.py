@@ -58,14 +58,16 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
         return [], f"no undamped divergence mode to follow ({searched}), {time.perf_counter() - t0:.1f} s"
     red = pen.maps
     J = np.asarray(red.J, dtype=np.int64)
-    C = pen.lattice.damping_in_layout()
-    D = None
-    matrices = []
+    made = []  # the PETSc objects made here, destroyed here (never the pencil's own)
     try:
+        C = pen.lattice.damping_in_layout()
+        made.append(C)
         D = reduced_matrix(C, red.P, red.Q, red.retained)
+        made.append(D)
         A, B = pen.A, pen.B
         if not is_petsc_mat(A):  # a serial SciPy pencil: PETSc Mats of its own
-            A, B, D = matrices = [mat_from_scipy(mpi_comm(comm), M) for M in (A, B, D)]
+            A, B, D = [mat_from_scipy(mpi_comm(comm), M) for M in (A, B, D)]
+            made += [A, B, D]
         modes, notes = [], []
         with QuadraticPencilOps(A, B, D) as ops:
             for sol in solutions:
@@ -92,8 +94,8 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
                 notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified "
                              f"(residual {res:.1e})")
     finally:
-        for M in (C, D, *matrices):
-            if is_petsc_mat(M) and M not in (pen.A, pen.B):
+        for M in made:
+            if is_petsc_mat(M):
                 M.destroy()
     statement = (f"{len(solutions)} undamped mode(s) followed to the damped problem on their supports "
                  f"(residual inverse iteration): {'; '.join(notes)}; {time.perf_counter() - t0:.1f} s")
