@@ -218,3 +218,17 @@ def test_fewer_values_than_ranks_end_cleanly(tmp_path):
                                          str(tmp_path / "one"), "-q"], timeout=240)
     assert res.returncode == 0, res.stderr[-2000:]
     assert (tmp_path / "one" / "sweep.csv").read_text().count("\n") == 2
+
+
+def test_a_damped_sweep_brackets_the_proved_damped_onset(scene):
+    """With damping η = 0.02 in both layers each row is the damped analysis, and the grid's
+    flutter bracket holds the onset critical_friction proves (1.3845, docs/damping.md)."""
+    data = scene.to_dict()
+    for layer in data["layers"]:
+        layer["viscosity"] = 0.02
+    damped = meicp.io.scene.scene_from_dict(data)
+    result = meicp.sweep(damped, "friction", [1.0, 1.5, 2.5], progress=False)
+    assert [row.stable for row in result.rows] == [True, False, False]
+    mu_f = meicp.critical_friction(damped).flutter
+    assert result.flutter_onset.lower <= mu_f.lower <= mu_f.upper <= result.flutter_onset.upper
+    assert (result.flutter_onset.lower, result.flutter_onset.upper) == (1.0, 1.5)
