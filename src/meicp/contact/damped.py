@@ -94,6 +94,8 @@ def refuse(scene, what: str) -> None:
 
 def damping_matrix(pen) -> sp.csr_matrix:
     """``D = P̃ C Q̃`` of a pencil (SciPy, on every rank: the damped paths are dense)."""
+    if not pen.distributed:
+        return pen.damping()
     maps = pen.maps
     return (maps.P @ pen.lattice.damping() @ maps.Q).tocsr()
 

@@ -30,7 +30,6 @@ from ..petsc.damped_refine import quadratic_certificate, refine_real_pair
 from ..petsc.mumps_c import MumpsError
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from ..petsc.mat import mat_from_scipy
-from ..petsc.pencil import reduced_matrix
 from .divergence.modes import mode_of
 from .divergence.search import first_search, search_settings
 from .divergence.sigma_window import probe_top, ritz_estimate
@@ -60,14 +59,9 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     J = np.asarray(red.J, dtype=np.int64)
     made = []  # the PETSc objects made here, destroyed here (never the pencil's own)
     try:
-        C = pen.lattice.damping_in_layout()
-        made.append(C)
-        D = reduced_matrix(C, red.P, red.Q, red.retained)
-        made.append(D)
-        A, B = pen.A, pen.B
+        A, B, D = pen.A, pen.B, pen.damping()
         if not is_petsc_mat(A):  # a serial SciPy pencil: PETSc Mats of its own
-            A, B, D = [mat_from_scipy(mpi_comm(comm), M) for M in (A, B, D)]
-            made += [A, B, D]
+            A, B, D = made = [mat_from_scipy(mpi_comm(comm), M) for M in (A, B, D)]
         modes, notes = [], []
         with QuadraticPencilOps(A, B, D) as ops:
             for sol in solutions:
@@ -95,8 +89,7 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
                              f"(residual {res:.1e})")
     finally:
         for M in made:
-            if is_petsc_mat(M):
-                M.destroy()
+            M.destroy()
     statement = (f"{len(solutions)} undamped mode(s) followed to the damped problem on their supports "
                  f"(residual inverse iteration): {'; '.join(notes)}; {time.perf_counter() - t0:.1f} s")
     log.info("damped divergence: %s", statement)

@@ -25,7 +25,6 @@ from ..core.matrix import is_petsc_mat
 from ..petsc.flutter import SlidingPencilOps
 from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
 from ..petsc.mat import mat_from_scipy
-from ..petsc.pencil import reduced_matrix
 from .flutter_dense import _fastest_first, _normalise
 from .flutter_growth import quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
@@ -112,17 +111,8 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
                                  counts={"targets": 0},
                                  growth=search_growth([], "the damped search computes only the eigenvalues near its "
                                                           "targets, and had none"))
-    lattice = pen.lattice
-    C = lattice.damping_in_layout()
-    D = None
-    try:
-        D = reduced_matrix(C, pen.maps.P, pen.maps.Q, pen.maps.retained)
-        return _search(pen, D, targets, why, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank, strict_tol=strict_tol,
-                       options=options)
-    finally:
-        for M in (C, D):
-            if is_petsc_mat(M):
-                M.destroy()
+    return _search(pen, pen.damping(), targets, why, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
+                   strict_tol=strict_tol, options=options)
 
 
 def _search(pen, D, targets, why: str, **solve) -> PencilFlutter:

@@ -11,7 +11,7 @@ pencil reduced from them keeps them (``Pencil.lattice``), with the communicator.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from ..core.matrix import is_petsc_mat
 from ..lattice.model import LatticeModel
 from ..petsc.assembly import LatticeMatrices
 from ..petsc.mat import destroying
-from ..petsc.pencil import reduced_pencil
+from ..petsc.pencil import reduced_matrix, reduced_pencil
 from ..scene import SOLVE, Scene
 from .lines import BASE, ContactLine, contact_lines, with_states
 from .maps import ReducedSystem, reduced_system
@@ -49,6 +49,7 @@ class Pencil:
     lattice: LatticeMatrices
     static: StaticResult | None = None
     owns_lattice: bool = False
+    _damping: object = field(default=None, init=False, repr=False)
 
     @property
     def J(self) -> np.ndarray:
@@ -81,6 +82,17 @@ class Pencil:
         D = P̃CQ̃ (:mod:`meicp.contact.damped`)."""
         return self.lattice.model.damped
 
+    def damping(self):
+        """``D = P̃CQ̃`` in the pencil's layout (a PETSc Mat on the row bands when the pencil is
+        distributed, else SciPy CSR), made once from the lattice's C and kept until
+        :meth:`destroy` — the damped searches of one run share it.  Collective."""
+        if self._damping is None:
+            maps = self.maps
+            C = self.lattice.damping_in_layout() if self.distributed else self.lattice.damping()
+            with destroying(C):
+                self._damping = reduced_matrix(C, maps.P, maps.Q, maps.retained)
+        return self._damping
+
     def __enter__(self) -> "Pencil":
         return self
 
@@ -90,8 +102,8 @@ class Pencil:
     def destroy(self) -> None:
         """Free PETSc matrices (collective): A and B, and K and M when owned; nothing to do for
         SciPy ones."""
-        with destroying(self.A, self.B):
-            self.A = self.B = None
+        with destroying(self.A, self.B, self._damping):
+            self.A = self.B = self._damping = None
         if self.owns_lattice:
             self.lattice.destroy()
 
