@@ -25,11 +25,10 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..core.comm import mpi_comm
-from ..core.matrix import is_petsc_mat
 from ..petsc.damped_refine import quadratic_certificate, refine_real_pair
 from ..petsc.mumps_c import MumpsError
 from ..petsc.flutter_quadratic import QuadraticPencilOps
-from ..petsc.mat import mat_from_scipy
+from ..petsc.mat import distributed
 from .divergence.modes import mode_of
 from .divergence.search import first_search, search_settings
 from .divergence.sigma_window import probe_top, ritz_estimate
@@ -57,39 +56,32 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
         return [], f"no undamped divergence mode to follow ({searched}), {time.perf_counter() - t0:.1f} s"
     red = pen.maps
     J = np.asarray(red.J, dtype=np.int64)
-    made = []  # the PETSc objects made here, destroyed here (never the pencil's own)
-    try:
-        A, B, D = pen.A, pen.B, pen.damping()
-        if not is_petsc_mat(A):  # a serial SciPy pencil: PETSc Mats of its own
-            A, B, D = made = [mat_from_scipy(mpi_comm(comm), M) for M in (A, B, D)]
-        modes, notes = [], []
-        with QuadraticPencilOps(A, B, D) as ops:
-            for sol in solutions:
-                out = np.setdiff1d(J, np.asarray(sol.support, dtype=np.int64))
-                try:
-                    lam, x, info = refine_real_pair(ops, float(np.sqrt(sol.lam)), np.asarray(sol.x, dtype=float),
-                                                    out)
-                except MumpsError as exc:  # T(√σ) singular on the support: nothing to follow from here
-                    notes.append(f"σ = {sol.lam:.6g}: {exc}")
-                    continue
-                if not info["converged"]:
-                    notes.append(f"σ = {sol.lam:.6g}: {info['why']}")
-                    continue
-                res, parts, support = quadratic_certificate(ops, lam, x, J)
-                worst = max(parts, key=parts.get)
-                if lam < 0 or res > CERTIFICATE_TOL:
-                    why = "λ < 0" if lam < 0 else f"{worst} {parts[worst]:.1e} > {CERTIFICATE_TOL:g}"
-                    notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} on its support, not a mode ({why})")
-                    continue
-                if any(abs(lam * lam - m.sigma) <= SAME * max(lam * lam, 1e-300) for m in modes):
-                    notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}, a mode already found")
-                    continue
-                modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=x, support=support, residual=res), red))
-                notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified "
-                             f"(residual {res:.1e})")
-    finally:
-        for M in made:
-            M.destroy()
+    modes, notes = [], []
+    # a serial SciPy pencil gets PETSc Mats of its own
+    with distributed(mpi_comm(comm), pen.A, pen.B, pen.damping()) as mats, QuadraticPencilOps(*mats) as ops:
+        for sol in solutions:
+            out = np.setdiff1d(J, np.asarray(sol.support, dtype=np.int64))
+            try:
+                lam, x, info = refine_real_pair(ops, float(np.sqrt(sol.lam)), np.asarray(sol.x, dtype=float),
+                                                out)
+            except MumpsError as exc:  # T(√σ) singular on the support: nothing to follow from here
+                notes.append(f"σ = {sol.lam:.6g}: {exc}")
+                continue
+            if not info["converged"]:
+                notes.append(f"σ = {sol.lam:.6g}: {info['why']}")
+                continue
+            res, parts, support = quadratic_certificate(ops, lam, x, J)
+            worst = max(parts, key=parts.get)
+            if lam < 0 or res > CERTIFICATE_TOL:
+                why = "λ < 0" if lam < 0 else f"{worst} {parts[worst]:.1e} > {CERTIFICATE_TOL:g}"
+                notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} on its support, not a mode ({why})")
+                continue
+            if any(abs(lam * lam - m.sigma) <= SAME * max(lam * lam, 1e-300) for m in modes):
+                notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}, a mode already found")
+                continue
+            modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=x, support=support, residual=res), red))
+            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified "
+                         f"(residual {res:.1e})")
     statement = (f"{len(solutions)} undamped mode(s) followed to the damped problem on their supports "
                  f"(residual inverse iteration): {'; '.join(notes)}; {time.perf_counter() - t0:.1f} s")
     log.info("damped divergence: %s", statement)

@@ -9,8 +9,9 @@ A pair counts as a flutter mode when its backward error on Q is at most
 ``MARGIN·η·(|λ|²‖B‖ + |λ|‖D‖ + ‖A‖)/(2|λ|‖B‖ + ‖D‖)`` — the first-order change of λ under a
 backward error η (‖Q'(λ)‖ ≈ 2|λ|‖B‖ + ‖D‖), with the searches' :data:`~.flutter_verdict.MARGIN`
 standing for the unknown condition number (with D = 0 it is that search's σ-margin over 2|λ|).
-Like the undamped search it proves flutter, never its absence, and bounds the growth from
-below only (no Bendixson rectangle for the quadratic pencil yet).  Collective.
+Like the undamped search it proves flutter, never its absence; the growth bracket has the
+fastest certified mode below and a proved but loose ceiling above (:func:`growth_ceiling`,
+Bendixson's rectangle carried over to the quadratic pencil).  Collective.
 """
 
 from __future__ import annotations
@@ -21,10 +22,9 @@ import numpy as np
 
 from ..core import limits
 from ..core.comm import mpi_comm
-from ..core.matrix import is_petsc_mat
 from ..petsc.flutter import SlidingPencilOps
 from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
-from ..petsc.mat import mat_from_scipy
+from ..petsc.mat import distributed
 from .flutter_dense import _fastest_first, _normalise
 from .flutter_growth import quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
@@ -116,25 +116,18 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
 
 
 def _search(pen, D, targets, why: str, **solve) -> PencilFlutter:
-    A, B = pen.A, pen.B
-    own = not is_petsc_mat(A)
-    if own:  # a serial SciPy pencil: PETSc Mats of its own for the search
-        A, B, D = (mat_from_scipy(pen.comm, M) for M in (A, B, D))
-    try:
-        ceiling = growth_ceiling(A, B, D)
-        with QuadraticPencilOps(A, B, D) as ops:
-            return _at_targets(ops, targets, why, ceiling, **solve)
-    finally:
-        if own:
-            for M in (A, B, D):
-                M.destroy()
+    # a serial SciPy pencil gets PETSc Mats of its own for the search
+    with distributed(pen.comm, pen.A, pen.B, D) as (A, B, D), QuadraticPencilOps(A, B, D) as ops:
+        return _at_targets(ops, targets, why, growth_ceiling(ops), **solve)
 
 
-def growth_ceiling(A, B, D) -> tuple[float, str] | None:
+def growth_ceiling(ops: QuadraticPencilOps) -> tuple[float, str] | None:
     """``(upper, how)``: no eigenvalue of ``λ²B + λD − A`` grows faster than ``upper``
     (:func:`~meicp.contact.flutter_growth.quadratic_ceiling` on Gershgorin's and the
-    skew-part bounds of A and D scaled by B), or None when B is not diagonal.  Collective."""
-    with SlidingPencilOps(A, B) as on_a, SlidingPencilOps(D, B) as on_d:
+    skew-part bounds of A and D scaled by B, from the rows ``ops`` holds), or None when B is
+    not diagonal.  Collective."""
+    with (SlidingPencilOps(ops.A, ops.B, ops.A_local, ops.B_local) as on_a,
+          SlidingPencilOps(ops.D, ops.B, ops.D_local, ops.B_local) as on_d):
         gamma, beta = on_a.real_part_bound(), on_a.skew_bound()
         if gamma is None or beta is None:
             return None

@@ -32,10 +32,10 @@ import numpy as np
 
 from ..core import limits
 from ..core.comm import mpi_comm
-from ..core.matrix import is_petsc_mat, to_dense
+from ..core.matrix import to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
-from ..petsc.mat import mat_from_scipy
+from ..petsc.mat import distributed
 from .damped import damped_flutter
 from .damped_search import search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
@@ -109,51 +109,42 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
     certified Re σ < γ for every eigenvalue known to the caller (the divergence verdict's
     Rayleigh bound), used when it is below Gershgorin's; with the skew-part bound it bounds
     the growth from above (:func:`~.flutter_growth.search_growth`).  Collective."""
-    own = not is_petsc_mat(A)
-    if own:
-        comm = mpi_comm(comm)
-        A, B = mat_from_scipy(comm, A), mat_from_scipy(comm, B)
-    try:
-        with SlidingPencilOps(A, B) as ops:
-            if ops.symmetric_with_diagonal_mass():
-                return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
-                                                     "a proof", growth=NO_FLUTTER)
-            bound = ops.skew_bound()
-            real_max, real_how = _real_part_bound(ops, real_bound) if bound is not None else (None, "")
-            modes, rejected, disks, borderline, moved = [], [], [], 0, []
-            for tau in targets:
-                tau = complex(tau)
-                tau = tau.conjugate() if tau.imag < 0 else tau
-                for attempt in range(off_cluster_tries + 1):
-                    last = attempt == off_cluster_tries
-                    pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
-                                                      max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
-                                                      options=options, gate=residual_tol, strict_tol=strict_tol)
-                    passed = sum(res <= residual_tol for _, _, res in pairs)
-                    disks.append((tau, info["radius"], len(pairs), passed, info["iterations"]))
-                    for sigma, x, res in pairs:
-                        margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
-                        if res > residual_tol:
-                            rejected.append(RejectedPair(sigma, res))
-                        elif abs(sigma.imag) > margin:
-                            if not any(abs(sigma - m.sigma) <= SAME * abs(m.sigma) for m in modes):
-                                modes.append(FlutterCandidate(sigma, _normalise(x), res, margin,
-                                                              f"shift-invert at τ = {tau:.6g}"))
-                        elif sigma.imag != 0:
-                            borderline += 1
-                    # nothing certified — pseudo-pairs, or none converged within the restarts — is
-                    # what a target inside a cluster of ill-conditioned eigenvalues gives
-                    if passed or last:
-                        break
-                    moved.append((tau, off_cluster(tau, attempt)))
-                    log.info("flutter: no pair at τ = %s passed the residual gate (%d converged in %d restarts); "
-                             "retrying off the cluster at τ = %s", f"{tau:.6g}", len(pairs), info["iterations"],
-                             f"{moved[-1][1]:.6g}")
-                    tau = moved[-1][1]
-    finally:
-        if own:
-            A.destroy()
-            B.destroy()
+    with distributed(mpi_comm(comm), A, B) as (A, B), SlidingPencilOps(A, B) as ops:
+        if ops.symmetric_with_diagonal_mass():
+            return PencilFlutter(False, evidence="symmetric A and diagonal positive B: every σ is real — "
+                                                 "a proof", growth=NO_FLUTTER)
+        bound = ops.skew_bound()
+        real_max, real_how = _real_part_bound(ops, real_bound) if bound is not None else (None, "")
+        modes, rejected, disks, borderline, moved = [], [], [], 0, []
+        for tau in targets:
+            tau = complex(tau)
+            tau = tau.conjugate() if tau.imag < 0 else tau
+            for attempt in range(off_cluster_tries + 1):
+                last = attempt == off_cluster_tries
+                pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
+                                                  max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
+                                                  options=options, gate=residual_tol, strict_tol=strict_tol)
+                passed = sum(res <= residual_tol for _, _, res in pairs)
+                disks.append((tau, info["radius"], len(pairs), passed, info["iterations"]))
+                for sigma, x, res in pairs:
+                    margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
+                    if res > residual_tol:
+                        rejected.append(RejectedPair(sigma, res))
+                    elif abs(sigma.imag) > margin:
+                        if not any(abs(sigma - m.sigma) <= SAME * abs(m.sigma) for m in modes):
+                            modes.append(FlutterCandidate(sigma, _normalise(x), res, margin,
+                                                          f"shift-invert at τ = {tau:.6g}"))
+                    elif sigma.imag != 0:
+                        borderline += 1
+                # nothing certified — pseudo-pairs, or none converged within the restarts — is
+                # what a target inside a cluster of ill-conditioned eigenvalues gives
+                if passed or last:
+                    break
+                moved.append((tau, off_cluster(tau, attempt)))
+                log.info("flutter: no pair at τ = %s passed the residual gate (%d converged in %d restarts); "
+                         "retrying off the cluster at τ = %s", f"{tau:.6g}", len(pairs), info["iterations"],
+                         f"{moved[-1][1]:.6g}")
+                tau = moved[-1][1]
     counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved)}
     text = "; ".join(f"|σ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} σ, {p} passing the residual gate, "
                      f"{it} restarts)" for t, r, k, p, it in disks)

@@ -110,12 +110,14 @@ class SlidingPencilOps(PencilWork):
     rows as SciPy CSR, and work vectors for residuals on (A, B).  Collective; ``destroy``
     (or a ``with`` block) frees the work vectors, not A and B."""
 
-    def __init__(self, A, B):
+    def __init__(self, A, B, A_local: sp.csr_matrix | None = None, B_local: sp.csr_matrix | None = None):
+        """``A_local``, ``B_local``: this rank's rows when the caller has them already."""
         PETSc = import_petsc()
         self.A, self.B = A, B
         self.norm_A = A.norm(PETSc.NormType.NORM_1)
         self.norm_B = B.norm(PETSc.NormType.NORM_1)
-        self.A_local, self.B_local = local_csr(A), local_csr(B)
+        self.A_local = local_csr(A) if A_local is None else A_local
+        self.B_local = local_csr(B) if B_local is None else B_local
         self._work = [A.createVecRight(), A.createVecRight(), A.createVecLeft(), A.createVecLeft(),
                       A.createVecLeft()]
         self._parts = False  # not made yet (:meth:`_scaled_parts`)

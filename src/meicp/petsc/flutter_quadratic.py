@@ -46,11 +46,14 @@ class QuadraticPencilOps(PencilWork):
         self._work = [A.createVecRight(), A.createVecLeft()]
 
     def times(self, M, x_local: np.ndarray) -> np.ndarray:
-        """``M x`` for a complex x (this rank's entries in, this rank's out).  Collective."""
+        """``M x`` (this rank's entries in, this rank's out): one product for a real x, two
+        for a complex one.  Collective."""
         x, y = self._work
         x.setArray(np.ascontiguousarray(x_local.real))
         M.mult(x, y)
         real = y.getArray(readonly=True).copy()
+        if not np.iscomplexobj(x_local):
+            return real
         x.setArray(np.ascontiguousarray(x_local.imag))
         M.mult(x, y)
         return real + 1j * y.getArray(readonly=True)

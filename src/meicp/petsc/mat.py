@@ -59,6 +59,20 @@ def mat_from_scipy(comm, A: sp.spmatrix):
     return mat_from_local_csr(pcomm, A[start:end], A.shape[0])
 
 
+@contextmanager
+def distributed(comm, *mats):
+    """``with distributed(comm, A, B) as (A, B):`` — the matrices as PETSc Mats: a PETSc one as
+    it is, a SciPy one (every rank holding it) distributed here (:func:`mat_from_scipy`) and
+    destroyed on exit (collective)."""
+    made = [None if matrix.is_petsc_mat(M) else mat_from_scipy(comm, M) for M in mats]
+    try:
+        yield tuple(M if m is None else m for M, m in zip(mats, made))
+    finally:
+        for m in made:
+            if m is not None:
+                m.destroy()
+
+
 def mat_to_scipy(A) -> sp.csr_matrix:
     """Gather a PETSc AIJ matrix into a SciPy CSR matrix on every rank.  Collective."""
     indptr, indices, data = A.getValuesCSR()
