@@ -60,10 +60,11 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     f(m) ≺ 0 (the bound at both ends) give f ≺ 0 on [0, m].  Bisection on m.  SciPy lattices
     (the critical friction's); every rank alike."""
     red = reduced_system(lattice.model, lines, case)
+    C, M = lattice.damping(), mass_matrix_scipy(lattice.model)  # μ changes neither: assembled once
 
     def proved(mu: float) -> bool:
         pen = pencil_of(lattice, lines, case, maps=red.with_friction(mu))
-        return pen.A is None or damped_rayleigh_bound(pen)[0]
+        return pen.A is None or damped_rayleigh_bound(pen, C, M)[0]
 
     if not np.isfinite(upper) or not proved(0.0):
         return 0.0
@@ -76,12 +77,15 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     return lo
 
 
-def damped_rayleigh_bound(pen) -> tuple[bool, str]:
+def damped_rayleigh_bound(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = None) -> tuple[bool, str]:
     """``(proved, statement)``: whether no real λ ≥ 0 solves the damped pencil's quadratic
     MEiCP, by the bound of the module docstring; the statement says what was shown or why
-    it proves nothing.  Collective on the pencil's communicator."""
+    it proves nothing.  ``C``, ``M``: the lattice's damping and mass (SciPy) when the caller
+    has them, else assembled here.  Collective on the pencil's communicator."""
     lattice = pen.lattice
-    nu, why = friction_shift(pen.maps, lattice.damping(), mass_matrix_scipy(lattice.model))
+    C = lattice.damping() if C is None else C
+    M = mass_matrix_scipy(lattice.model) if M is None else M
+    nu, why = friction_shift(pen.maps, C, M)
     if nu is None:
         return False, f"damped Rayleigh bound not tried: {why}"
     tau = -0.25 * nu * nu
