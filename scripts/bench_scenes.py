@@ -122,6 +122,8 @@ def run(args) -> None:
         rel = str(path.relative_to(ROOT))
         print(f"{path.stem}: {dofs:,} DOFs on {ranks} rank(s)", flush=True)
         log = Path(args.logs) / f"{path.stem}.log" if args.logs else None
+        if log is not None:
+            log.parent.mkdir(parents=True, exist_ok=True)  # before the runs, not after them
         side = side_by_side(args, ranks, rel, ["-v" if args.logs else "-q"], args.lock if ranks > 1 else None, log)
         doc, eig, peaks, eig_peaks, wall, timed_out, load1, solve_s = side
         proofs = doc.get("proofs") or [{}]

@@ -15,6 +15,7 @@ import meicp
 from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of, search, sigma_window
 from meicp.contact.divergence.condensed import CondensedProof, prove_no_divergence
 from meicp.contact.problem import pencil
+from meicp.contact import proxy
 from meicp.contact.result import InstabilityResult
 from meicp.examples import two_layer_scene
 
@@ -52,11 +53,12 @@ def test_stable_by_the_rayleigh_bound_past_16_contacts():
     assert r.evidence.endswith("every MEiCP solution has σ = xᵀsym(A)x / xᵀsym(B)x < 0 (a proof)")
 
 
-def test_the_full_support_mode_is_found_from_the_top_of_the_window():
+def test_the_full_support_mode_is_found_by_the_first_search():
     """nx = 60, 2 + 2 rows, slip−, μ = 3: the full support carries σ = 0.8188 (before:
-    cycling among the slow vibrations nearest 0), found by the first search from the short
-    Lanczos run's estimate of the top: no σ-window is certified for a mode.  The certified
-    mode's sentence is checked here."""
+    cycling among the slow vibrations nearest 0), found by the first search from 1.25× the
+    contact-strip proxy's rightmost real σ (below the short Lanczos run's estimate of the
+    top): no σ-window is certified for a mode.  The certified mode's sentence is checked
+    here."""
     scene = _scene(60, (2, 2), "slip-", 3.0)
     r = meicp.analyze(scene, flutter=False)
     assert r.divergence is True and np.isclose(r.modes[0].sigma, 0.818755, rtol=1e-5)
@@ -65,11 +67,48 @@ def test_the_full_support_mode_is_found_from_the_top_of_the_window():
     assert proof.sigma_window is None and 1 <= proof.eigen_solves <= search.FIRST_SEARCH
     assert proof.supports_visited >= 1 and proof.margin is None and proof.stable_friction is None
     with pencil(scene) as pen:
-        shift = sigma_window.probe_top(pen.A, pen.B).shift
-    assert shift > r.modes[0].sigma
+        top = sigma_window.probe_top(pen.A, pen.B).shift
+        estimate = proxy.rightmost_real(scene, pen.lines)
+    shift = search.PROXY_SHIFT * estimate
+    assert r.modes[0].sigma < shift < top
     assert r.evidence == proof.statement == (
         f"search from σ = {shift:.6g}: a certified divergence mode after {proof.eigen_solves} eigen-solve(s), "
         f"{proof.supports_visited} support(s)")
+
+
+def test_the_first_search_starts_from_the_proxy_where_the_top_misses_the_mode():
+    """nx = 400, 10 + 10 rows, slip+, shear −0.5, μ = 2.303: the window's top (θ ≈ 1.11) lies
+    far above the lattice's modes, and the first search from it converged to none
+    (docs/benchmarks-notes.md, "first search from the proxy"); from 1.25× the contact-strip
+    proxy's rightmost real σ (0.0674) it certifies a mode (σ ≈ 0.0414) with no proof or window."""
+    scene = two_layer_scene(400, (10, 10), mu=2.303, states="slip+", shear=-0.5)
+    r = meicp.analyze(scene, flutter=False)
+    proof = r.proofs[0]
+    assert r.divergence is True and proof.test == "certified-mode" and proof.sigma_window is None
+    assert 0.0413 < r.modes[0].sigma < 0.0415 and r.modes[0].residual < 1e-10  # one of several modes there
+    with pencil(scene) as pen:
+        estimate = proxy.rightmost_real(scene, pen.lines)
+    assert np.isclose(estimate, 0.0674, rtol=1e-3)
+    assert r.evidence.startswith(f"search from σ = {search.PROXY_SHIFT * estimate:.6g}: a certified divergence mode")
+    # a search finds some modes: the summary does not call the first the fastest
+    table = "\n".join(text for _, text in r.summary_rows(scene))
+    assert "fastest found first, not proved the fastest" in table
+
+
+def test_the_first_search_starts_at_the_top_when_the_proxy_estimate_is_not_below_it():
+    """The proxy's estimate only lowers the first shift: with a top below 1.25σ_p, or no proxy
+    (an embedded band), the search starts at the top."""
+    scene = _scene(60, (2, 2), "slip-", 3.0)
+    with pencil(scene) as pen:
+        estimate = proxy.rightmost_real(scene, pen.lines)
+        low = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, estimate, 0.0)
+        assert search.first_shift(low, scene, pen.lines) == (estimate, "the window's top")
+        high = low.from_shift(10 * estimate)
+        shift, why = search.first_shift(high, scene, pen.lines)
+        assert shift == search.PROXY_SHIFT * estimate and "proxy" in why
+    banded = meicp.load_scene(ROOT / "data" / "scenes" / "embedded_on_base.toml")
+    with pencil(banded) as pen:
+        assert proxy.rightmost_real(banded, pen.lines) is None
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():
@@ -132,7 +171,7 @@ def test_below_a_positive_top_the_proof_comes_before_any_search(monkeypatch):
     still runs (here, from the faked top, it misses the mode: undecided, never stable)."""
     from meicp.contact.divergence import driver
 
-    def no_first_search(settings):
+    def no_first_search(settings, *where):
         raise AssertionError("the first search was made below a positive top")
 
     monkeypatch.setattr(driver, "first_search", no_first_search)

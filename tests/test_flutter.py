@@ -14,6 +14,7 @@ import scipy.linalg as sl
 import meicp
 from meicp.contact import flutter as fl
 from meicp.contact import flutter_proxy as fp
+from meicp.contact import proxy as strip
 from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
 from meicp.core import limits
@@ -524,9 +525,9 @@ def _interface_scene(nx, rows, mu, states="slip+"):
 
 def test_sliding_window_picks_the_middlemost_window_with_most_slips():
     states = ["stick"] * 10 + ["slip+"] * 4 + ["stick"] * 6 + ["slip-"] * 5 + ["stick"] * 5
-    assert fp.sliding_window(states, 5) == 20
-    assert fp.sliding_window(["slip+"] * 30, 10) == 10
-    assert fp.sliding_window(["stick"] * 9, 3) == 3
+    assert strip.sliding_window(states, 5) == 20
+    assert strip.sliding_window(["slip+"] * 30, 10) == 10
+    assert strip.sliding_window(["stick"] * 9, 3) == 3
 
 
 def test_interface_proxy_targets_give_certified_modes_and_only_a_lower_bound():
@@ -552,15 +553,15 @@ def test_interface_proxy_is_cut_where_the_interface_slides():
     from meicp.contact.lines import contact_lines
     from meicp.lattice.model import LatticeModel
     line, = contact_lines(scene, LatticeModel(scene))
-    proxy = fp.interface_proxy(scene, line)
-    assert proxy.nx == fp.PROXY_NX and [layer.rows for layer in proxy.layers] == [fp.PROXY_ROWS // 2] * 2
+    proxy = strip.interface_proxy(scene, line)
+    assert proxy.nx == strip.PROXY_NX and [layer.rows for layer in proxy.layers] == [strip.PROXY_ROWS // 2] * 2
     assert proxy.boundary.bottom == "fixed" and proxy.boundary.top == "fixed"
     itf, = (i for i in proxy.interfaces if i.kind == "frictional")
-    assert itf.index == 0 and itf.states.count("slip-") == 30 and len(itf.states) == fp.PROXY_NX
+    assert itf.index == 0 and itf.states.count("slip-") == 30 and len(itf.states) == strip.PROXY_NX
     from meicp.examples import two_layer_scene
     based = two_layer_scene(100, (6, 7), mu=1.0, interface={"kind": "frictional", "friction": 0.5, "states": states})
     lines = contact_lines(based, LatticeModel(based))
-    assert fp.interface_proxy(based, lines[1]) is None
+    assert strip.interface_proxy(based, lines[1]) is None
 
 
 def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monkeypatch):

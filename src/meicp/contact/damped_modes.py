@@ -4,7 +4,7 @@
 Light damping moves a divergence mode without changing its support: the first steps of the
 undamped verdict of the same pencil (its A and B alone; :mod:`~meicp.contact.divergence.driver`
 steps 1–2: the Lanczos estimate of the window's top, then, when it is above 0, the short
-active-set search from it) find modes (σ, x, S), and each is followed to the quadratic problem on the same support —
+active-set search from the proxy's estimate or the top, :func:`~.divergence.search.first_search`) find modes (σ, x, S), and each is followed to the quadratic problem on the same support —
 ``(λ²B + λD − A)_RR x_R = 0``, ``x = 0`` on ``J ∖ S`` — from ``(√σ, x)`` by residual inverse
 iteration (:func:`meicp.petsc.damped_refine.refine_real_pair`).  What it converges to is a
 damped divergence mode only when it passes the quadratic MEiCP's certificate on the whole
@@ -97,7 +97,8 @@ def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     if not top.positive:
         return [], (f"the window's top θ = {top.theta:.6g} of (sym A, sym B) is not above 0: the undamped short "
                     "search would start among the slow vibrations, so none was made")
-    outcome = first_search(search_settings(pen, scene, comm, 0.0, tol, options, top.shift, started))
+    outcome = first_search(search_settings(pen, scene, comm, 0.0, tol, options, top.shift, started), scene,
+                           pen.lines)
     solutions = sorted((s for s in getattr(outcome.eicp, "solutions", None) or [] if s.lam >= 0),
                        key=lambda s: -s.lam)[:FOLLOWED]
     return solutions, (f"the undamped short search from σ = {outcome.target:.6g} found "

@@ -27,11 +27,12 @@ from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
 from ..petsc.mat import distributed
 from .flutter_dense import _fastest_first, _normalise
 from .flutter_growth import quadratic_ceiling, search_growth
-from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES, PROXY_NX, PROXY_ROWS,
+from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
                              memory_refusal, search_conclusion)
 from .lines import BASE
+from .proxy import PROXY_NX, PROXY_ROWS
 
 log = logging.getLogger("meicp")
 

@@ -20,6 +20,9 @@ GLYPHS = dict(zip(STATES, "|><o~"))
 STRIP_MAX = 100
 #: modes listed in a summary
 SUMMARY_MODES = 10
+#: the proofs whose modes a search found (the window procedure's, the damped modes followed
+#: from it): other modes may exist, so the first listed is not proved the fastest
+SEARCHED_MODES = ("certified-mode", "quadratic-followed")
 #: the verdict of a scene without contact (:mod:`meicp.contact.modal`)
 MODAL_VERDICT = "NO CONTACT: modal analysis"
 
@@ -359,7 +362,10 @@ class InstabilityResult(Result):
                 rows.append(("", f"  ... {n - SUMMARY_MODES} more (all in results.h5)"))
         elif self.modes:
             n = len(self.modes)
-            rows.append(("modes", f"{n} certified divergence mode{'s' if n != 1 else ''} (σ = λ², fastest first)"))
+            # a search finds some modes, not all: its fastest is not proved the fastest
+            searched = any(p.test in SEARCHED_MODES for p in self.proofs)
+            order = "fastest found first, not proved the fastest" if searched else "fastest first"
+            rows.append(("modes", f"{n} certified divergence mode{'s' if n != 1 else ''} (σ = λ², {order})"))
             rows.append(("", f"  {'#':>3}  {'σ':>14}  {'growth rate λ':>14}  {'support':>8}  {'residual':>9}"))
             for k, m in enumerate(self.modes[:SUMMARY_MODES]):
                 sup = int(np.size(m.support)) + sum(int(np.size(v)) for v in m.interface_support.values())

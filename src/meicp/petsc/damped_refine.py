@@ -6,7 +6,7 @@ outside its support and ``(λ²B + λD − A)_RR x_R = 0`` on the rest R.  From 
 undamped mode's ``(√σ, x)``, whose support it usually keeps when the damping is light —
 :func:`refine_real_pair` converges to it by *residual inverse iteration* (Neumaier, SIAM J.
 Numer. Anal. 22, 1985): with ``T(λ) = λ²B + λD − A`` restricted to R and one factor of
-``T(λ₀)``,
+``T(λ₀)`` (block low rank: :data:`REFINE_LOW_RANK`),
 
     λ_{k+1}: the real root nearest λ_k of  wᵀT(λ₀)⁻¹T(λ)x_k = 0   (a quadratic in λ),
     x_{k+1} = x_k − T(λ₀)⁻¹T(λ_{k+1})x_k,   normalised by wᵀx = 1,
@@ -38,6 +38,12 @@ from .options import FLUTTER, mumps_controls
 
 #: ξ_j > SUPPORT_TOL·‖ξ‖∞ counts as positive (as the dense quadratic MEiCP's)
 SUPPORT_TOL = 1e-9
+#: the factor of T(λ₀) is block-low-rank at this dropping tolerance (MUMPS ICNTL(35) = 2,
+#: CNTL(7)): the iteration only needs an approximate inverse — its residuals are computed on
+#: the pencil itself, so the factor's accuracy sets the rate, never the answer.  At 10⁶ DOFs
+#: the refinement took 7.0 s against 13–15 s full rank, the same λ in the same single step
+#: (docs/benchmarks-notes.md, "REFINE_LOW_RANK")
+REFINE_LOW_RANK = 1e-8
 
 
 def _allsum(comm, *values) -> np.ndarray:
@@ -96,6 +102,7 @@ def refine_real_pair(ops: QuadraticPencilOps, lam0: float, x0: np.ndarray, out: 
 
     T0 = (lam0 * lam0 * ops.B_local + lam0 * ops.D_local - ops.A_local).tocsr()
     icntl, cntl = mumps_controls(FLUTTER + "st_mat_mumps_")  # the flutter search's MUMPS options apply
+    icntl, cntl = {35: 2, **icntl}, {7: REFINE_LOW_RANK, **cntl}
     x = restrict(x0[lo:hi])
     w = x.copy()
     x = x / _allsum(comm, np.dot(w, x))[0]

@@ -6,8 +6,9 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
 
 1. **Rayleigh bound at 0** (one LDLᵀ), unless a short Lanczos run on (sym A, sym B), made
    first (:func:`.sigma_window.probe_top`), has a Ritz value θ > 0.
-2. **First search** from the window's top θ: a short active-set search (:mod:`.search`),
-   only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
+2. **First search**: a short active-set search (:mod:`.search`) from the contact-strip
+   proxy's rightmost real σ (times :data:`.search.PROXY_SHIFT`) when below the window's top θ,
+   else from θ; only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
    slow vibrations and gives up after one restart
    (docs/benchmarks-notes.md, "first search only above 0"), so the proof comes first and the
    whole search after it.
@@ -85,7 +86,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         return verdict
     reasons = [why]
     settings = search_settings(pen, scene, comm, lam_min, tol, options, top.shift, started)
-    first = first_search(settings) if top.positive else None
+    first = first_search(settings, scene, pen.lines) if top.positive else None
     if first is not None and first.found:
         return steps.mode_found(first, None)
     condensed = steps.condensed_proof(pen, comm, tol, procedures.prove, started)
@@ -99,7 +100,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     if sigma_max is None:
         reasons.append(no_sigma_max(top))
     else:
-        settings = settings.from_top(sigma_max)  # the whole search from the certified top
+        settings = settings.from_shift(sigma_max)  # the whole search from the certified top
     reasons.append(f"condensed test: {condensed.statement}")
     window = tuple(float(v) for v in condensed.window) if condensed.window else None
     last = first

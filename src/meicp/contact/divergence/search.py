@@ -5,7 +5,10 @@ Its shift sits at an estimate of λ_max(sym A, sym B), which bounds the real par
 eigenvalue of every support's pencil, so the first pair it takes is the rightmost eigenvalue
 of the full support S = J — never the slow vibrations clustered just below 0 that a shift at
 0 returns; each support update follows that pair.  A returned mode is certified on the whole
-reduced problem.  The first search is short (``FIRST_SEARCH`` support updates,
+reduced problem.  The first search starts lower where the scene's contact-strip proxy has a
+real σ_p > 0 below the top (at ``PROXY_SHIFT``·σ_p: a contact mode's σ hardly depends on the
+lattice's size, and the top, a Ritz value of the symmetric part, can lie far above every
+eigenvalue, so that the rightmost converged slowly or not first).  The first search is short (``FIRST_SEARCH`` support updates,
 ``FIRST_EPS_MAX_IT`` restarts each, given up after ``FIRST_GIVE_UP`` restarts when every Ritz
 value estimates an eigenvalue below 0); the whole search, with the caller's budget, comes
 only after the condensed proof stopped.
@@ -25,6 +28,7 @@ from dataclasses import dataclass, replace
 
 from ...core.errors import PetscOptionError
 from ...eicp.solve import solve_eicp
+from ..proxy import rightmost_real
 from .modes import FoundModes, certified_modes
 
 #: support updates of the first, short search from the window's top (before the proof), and
@@ -44,6 +48,14 @@ FIRST_GIVE_UP = 1
 #: nine, where stopping at six cost a condensed proof and a σ-window before the whole search
 #: found it (docs/benchmarks-notes.md, "first search")
 FIRST_EPS_MAX_IT_CONVERGING = 12
+#: the first search starts at PROXY_SHIFT times the contact-strip proxy's rightmost real
+#: eigenvalue σ_p when that lies below the window's top: a contact mode's σ hardly depends on
+#: the lattice's size, so from there the lattice's mode converges in a restart or two where
+#: from the top (a Ritz value of the symmetric part, often 10–20× above it) it took nine, or
+#: never came first.  On the 37 scenes of the first-search benchmark whose top is positive
+#: (two-layer 400 and 1000 columns, frictional interfaces): every mode found from the top
+#: found again, the same σ, and 6 more (docs/benchmarks-notes.md, "first search from the proxy")
+PROXY_SHIFT = 1.25
 #: where the search from the top ends with no real eigenpair nearest its shift (a nonsymmetric
 #: pencil at large μ: complex eigenvalues crowd the top of the window), short searches from
 #: these fractions of the top follow (a frictional interface at μ = 20, 10⁴ DOFs: the top at
@@ -95,9 +107,9 @@ class SearchSettings:
         """Whether the whole budget exceeds the first search's."""
         return self.full_budget is None or self.full_budget > self.first_budget
 
-    def from_top(self, sigma_max: float) -> SearchSettings:
-        """The same search from a certified σ_max."""
-        return replace(self, keywords={**self.keywords, "target": sigma_max})
+    def from_shift(self, shift: float) -> SearchSettings:
+        """The same search from another shift (a certified σ_max, the proxy's estimate)."""
+        return replace(self, keywords={**self.keywords, "target": shift})
 
     def widened(self) -> SearchSettings:
         """The same search with the caller's ``nev`` eigenpairs per solve."""
@@ -157,9 +169,24 @@ def search(settings: SearchSettings, before: Tally, max_iter: int | None, *, fir
     return SearchOutcome(eicp, before.after(eicp), got, settings.target)
 
 
-def first_search(settings: SearchSettings) -> SearchOutcome:
-    """The short search from the window's top: a mode on the full support, or one support
-    update away, is found at once."""
+def first_shift(settings: SearchSettings, scene, lines) -> tuple[float, str]:
+    """``(shift, why)``: where the first search starts — PROXY_SHIFT times the rightmost real
+    eigenvalue of the scene's contact-strip proxy (:func:`~meicp.contact.proxy.rightmost_real`)
+    when that is below the window's top ``settings.target``, else the top."""
+    estimate = rightmost_real(scene, lines)
+    if estimate is None or not PROXY_SHIFT * estimate < settings.target:
+        return settings.target, "the window's top"
+    return PROXY_SHIFT * estimate, f"{PROXY_SHIFT:g}× the contact-strip proxy's rightmost real σ = {estimate:.6g}"
+
+
+def first_search(settings: SearchSettings, scene=None, lines=None) -> SearchOutcome:
+    """The short search: a mode on the full support, or one support update away, is found at
+    once.  From the shift :func:`first_shift` places (given the scene and its contact lines),
+    else from ``settings.target``; the outcome's ``target`` says where it started."""
+    if scene is not None:
+        shift, why = first_shift(settings, scene, lines)
+        log.info("divergence: first search from σ = %.6g (%s)", shift, why)
+        settings = settings.from_shift(shift)
     return search(settings, Tally(), settings.first_budget, first=True)
 
 
@@ -183,7 +210,7 @@ def searches_below(settings: SearchSettings, last: SearchOutcome) -> tuple[Searc
         if not settings.target > 0:
             break
         tried.append(settings.target * factor)
-        last = search(settings.from_top(tried[-1]), last.tally, settings.full_budget, first=True)
+        last = search(settings.from_shift(tried[-1]), last.tally, settings.full_budget, first=True)
         if last.found:
             break
     return last, tried
