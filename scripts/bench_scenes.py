@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 
 from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
+from meicp.core.blas_kernel import choose_openblas_kernel
 
 SCENES = ROOT / "data" / "scenes"
 FIELDS = ["scene", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "test", "sigma",
@@ -83,6 +84,7 @@ def _run(cmd: list[str], timeout: float, log: Path | None = None) -> tuple[str, 
     lines) goes to ``log`` when given."""
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
            "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+    choose_openblas_kernel(env)  # the same OpenBLAS kernel for meicp and the eigen-solve beside it
     t0 = time.perf_counter()
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)

@@ -16,8 +16,10 @@ from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of,
 from meicp.contact.divergence.condensed import CondensedProof, prove_no_divergence
 from meicp.contact.problem import pencil
 from meicp.contact import proxy
+from meicp.contact.lines import contact_lines
 from meicp.contact.result import InstabilityResult
 from meicp.examples import two_layer_scene
+from meicp.lattice.model import LatticeModel
 
 from .helpers import interface_chain_scene
 
@@ -109,6 +111,22 @@ def test_the_first_search_starts_at_the_top_when_the_proxy_estimate_is_not_below
     banded = meicp.load_scene(ROOT / "data" / "scenes" / "embedded_on_base.toml")
     with pencil(banded) as pen:
         assert proxy.rightmost_real(banded, pen.lines) is None
+
+
+def test_the_proxy_estimate_is_skipped_where_it_would_mislead_or_fail():
+    """No estimate from a proxy with a grazing contact (its pencil needs a tangential case: it
+    used to raise), none from a rigid motion at rounding level (a free top: σ ≈ 1e-14 would
+    start the search among the slow vibrations), and a caller's own target is kept."""
+    grazing = two_layer_scene(60, (2, 2), mu=3.0, states=["slip-"] * 29 + ["grazing"] + ["slip-"] * 30)
+    assert proxy.rightmost_real(grazing, contact_lines(grazing, LatticeModel(grazing))) is None
+    assert meicp.analyze(grazing, flutter=False).divergence is True
+    free_top = two_layer_scene(60, (2, 2), mu=1.0, states="slip+", top="free")
+    with pencil(free_top) as pen:
+        assert proxy.rightmost_real(free_top, pen.lines) is None
+    scene = _scene(60, (2, 2), "slip-", 3.0)
+    with pencil(scene) as pen:
+        given = search.search_settings(pen, scene, None, 0.0, 1e-10, {"target": 5.0}, 1.0, 0.0)
+        assert search.first_shift(given, scene, pen.lines) == (5.0, "the caller's target")
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():

@@ -6,7 +6,11 @@ the README for the public API.
 """
 
 from ._version import __version__
-from .core.environment import require_python_stack
+from .core.blas_kernel import choose_openblas_kernel
+
+choose_openblas_kernel()  # before NumPy or PETSc load OpenBLAS: its kernels, not Prescott's
+
+from .core.environment import require_python_stack  # noqa: E402
 
 require_python_stack()  # NumPy, SciPy, mpi4py from Debian: a clear message if not
 

@@ -70,7 +70,8 @@ def analyze(scene, comm=None, *, method: str | None = None, lam_min: float | Non
     nev : int or None
         Eigenpairs per eigen-solve (the vibration modes of a scene without contact).
     target : float or None
-        Shift of the active-set search's SLEPc solves (default: the top of the σ-window).
+        Shift of the active-set search's SLEPc solves (default: the top of the σ-window, and for
+        the first, short search 1.25× the contact-strip proxy's rightmost real σ when lower).
     max_iter : int or None
         The active-set search's budget of support updates (default: the scene's
         ``[solver] max_iterations``).

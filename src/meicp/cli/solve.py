@@ -305,6 +305,6 @@ def _shortened(text: str, limit: int = 80) -> str:
 _DESCRIBE = {"results": "scene, versions, states, forces, modes, certificates, timings",
              "lattice": "lattice + mode shapes + contact states (HDF5)",
              "xdmf": "ParaView/meshio entry point for lattice.h5",
-             "mode_png": "fastest mode on the deformed lattice",
+             "mode_png": "fastest divergence mode found, on the deformed lattice",
              "flutter_png": "fastest flutter mode (real part of its complex shape; both parts in the XDMF)",
              "contacts_png": "contact states and forces along each contact line"}

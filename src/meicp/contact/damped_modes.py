@@ -91,7 +91,8 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
 
 def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     """The certified undamped modes (EiCP solutions, σ ≥ 0, the fastest first, at most
-    :data:`FOLLOWED`) of the short search from the window's top, and what was done."""
+    :data:`FOLLOWED`) of the first, short search (from the proxy's estimate or the window's
+    top: :func:`~.divergence.search.first_search`), and what was done."""
     started = time.perf_counter()
     top = probe_top(pen.A, pen.B, ritz_estimate)
     if not top.positive:

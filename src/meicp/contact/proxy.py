@@ -12,6 +12,7 @@ import dataclasses
 import numpy as np
 import scipy.linalg as sl
 
+from ..core.errors import ProblemError
 from .lines import BASE, ContactState, state_names
 from .problem import pencil
 
@@ -106,23 +107,35 @@ def proxy_of(scene, lines):
     return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
 
 
+#: a proxy's real σ counts as above 0 beyond this multiple of max|A|/max|B| (a free lattice's
+#: rigid motion comes out at ±1e-14 of that scale)
+POSITIVE = 1e-8
+
+
 def rightmost_real(scene, lines) -> float | None:
-    """The largest real eigenvalue σ > 0 of the proxy's sliding pencil (A, B) — its fastest
-    divergence-like mode (dense, serial: a few hundred DOFs) — or None (no proxy, or no real σ
-    above 0).  A damped scene's proxy gives its undamped pencil's.  Where the divergence
-    search starts, never a proof of anything."""
+    """The largest real eigenvalue σ > 0 (beyond :data:`POSITIVE`) of the proxy's sliding
+    pencil (A, B) — its fastest divergence-like mode (dense, serial: a few hundred DOFs) — or
+    None (no proxy, a grazing contact in it, a failed eigen-solve, or no real σ above 0).  A
+    damped scene's proxy gives its undamped pencil's.  Where the divergence search starts,
+    never a proof of anything; on several ranks the caller computes it on one
+    (:func:`~meicp.contact.on_root.on_root`): the shift it gives must be the same on all."""
     proxy, _ = proxy_of(scene, lines)
-    if proxy is None:
-        return None
-    with pencil(proxy) as pen:
-        if pen.A is None:
-            return None
+    if proxy is None or any(ContactState.GRAZING in line.states for line in lines):
+        return None  # a grazing contact's proxy needs a case per tangential choice: no estimate
+    try:
+        with pencil(proxy) as pen:
+            if pen.A is None:
+                return None
+            A, B = pen.A.toarray(), pen.B.toarray()
         with np.errstate(all="ignore"):
-            values = sl.eigvals(pen.A.toarray(), pen.B.toarray())
+            values = sl.eigvals(A, B)
+    except (ProblemError, np.linalg.LinAlgError, ValueError):
+        return None
     values = values[np.isfinite(values)]
     real = values.real[np.abs(values.imag) <= 1e-8 * np.maximum(1.0, np.abs(values))]
     top = float(real.max(initial=0.0))
-    return top if top > 0 else None
+    scale = np.abs(A).max() / max(np.abs(B).max(), 1e-300)
+    return top if top > POSITIVE * scale else None
 
 
 __all__ = ["PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "interface_proxy", "proxy_of", "rightmost_real",

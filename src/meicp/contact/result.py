@@ -20,9 +20,12 @@ GLYPHS = dict(zip(STATES, "|><o~"))
 STRIP_MAX = 100
 #: modes listed in a summary
 SUMMARY_MODES = 10
-#: the proofs whose modes a search found (the window procedure's, the damped modes followed
-#: from it): other modes may exist, so the first listed is not proved the fastest
-SEARCHED_MODES = ("certified-mode", "quadratic-followed")
+#: the proofs that leave no mode unfound: the enumeration of every support (undamped or
+#: damped) and the proofs that there is none (a grazing branch's); only where every branch's
+#: proof is one of them is the first mode listed the fastest — a search, or a method named by
+#: the caller, finds some
+ALL_MODES = ("enumerate", "quadratic-enumerate", "rayleigh-inertia", "condensed-pd", "condensed-windows",
+             "rayleigh-window+condensed-windows", "damped-rayleigh", "all-held")
 #: the verdict of a scene without contact (:mod:`meicp.contact.modal`)
 MODAL_VERDICT = "NO CONTACT: modal analysis"
 
@@ -363,8 +366,8 @@ class InstabilityResult(Result):
         elif self.modes:
             n = len(self.modes)
             # a search finds some modes, not all: its fastest is not proved the fastest
-            searched = any(p.test in SEARCHED_MODES for p in self.proofs)
-            order = "fastest found first, not proved the fastest" if searched else "fastest first"
+            every = all(p.test in ALL_MODES for p in self.proofs)
+            order = "fastest first" if every else "fastest found first, not proved the fastest"
             rows.append(("modes", f"{n} certified divergence mode{'s' if n != 1 else ''} (σ = λ², {order})"))
             rows.append(("", f"  {'#':>3}  {'σ':>14}  {'growth rate λ':>14}  {'support':>8}  {'residual':>9}"))
             for k, m in enumerate(self.modes[:SUMMARY_MODES]):

@@ -25,8 +25,8 @@ from .mat import vec_to_numpy
 from .options import ACTIVE_SET, OptionsScope, petsc_errors, report_unused
 
 #: MUMPS factors A − τB block-low-rank at this dropping tolerance (ICNTL(35) = 2, CNTL(7)) and
-#: on the graph of node pairs (ICNTL(15) = −2, when the order is even: MUMPS gives a wrong
-#: factor without an error when the block does not divide it), as the flutter search does
+#: on the graph of node pairs (ICNTL(15) = −2, when the order is even: MUMPS 5.5 refuses an
+#: order the block does not divide, INFOG(1) = −57), as the flutter search does
 #: (`meicp.petsc.flutter.LOW_RANK_TOL`): the shipped 10⁶-DOF `extensive_contact.toml`, whose
 #: first search converges in one restart, spent 29.6 s in the divergence verdict full rank,
 #: 24.0 s block-low-rank, 20.8 s with both, the same certified mode (residual 1.8e-15)

@@ -318,7 +318,7 @@ def plot_mode(scene, path, mode=None, *, stable: bool | None = None, title: str 
     ax.set_ylabel("y")
     name = _scene_name(model, title)
     if mode is not None:
-        head = f"{name}: " + (heading or f"fastest divergence mode, σ = {float(mode.sigma):.6g}, "
+        head = f"{name}: " + (heading or f"fastest divergence mode found, σ = {float(mode.sigma):.6g}, "
                                          f"growth rate λ = {mode.growth_rate:.6g}")
         sub = (f"deformed = reference + {scale:.3g}·x (largest displacement {100 * fraction:.0f}% "
                f"of the height)" if scale > 0 else "zero mode shape")

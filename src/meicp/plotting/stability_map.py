@@ -67,7 +67,7 @@ def plot_stability_map(path, values, *, divergence, growth, flutter, flutter_gro
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     ax.plot(x, g_div, "o-", ms=3.5, color=COLOURS["divergence"],
-            label="divergence: growth λ = √σ of the fastest mode (0: proved absent)")
+            label="divergence: growth λ = √σ of the fastest mode found (0: proved absent)")
     # filled: the whole spectrum bounds every flutter mode's growth by the one found (it is the
     # fastest); hollow: the fastest *found*, a lower bound
     proved = np.isfinite(bound)

@@ -28,7 +28,8 @@ class SweepRow:
 
     value: the parameter's value.  divergence, flutter, stable: True / False / None
     (undecided) as in :class:`~meicp.contact.result.InstabilityResult`.  sigma: σ = λ² of
-    the fastest divergence mode (None without one); growth: λ = √σ.  flutter_growth: Re λ of
+    the fastest divergence mode found (None without one; the fastest only where every support
+    was enumerated, a search finds some); growth: λ = √σ.  flutter_growth: Re λ of
     the fastest flutter mode *found* — a lower bound on the fastest; flutter_growth_bound:
     an upper bound on every flutter mode's Re λ when the whole spectrum proves one (0 when
     flutter is excluded), else None (the search's Bendixson bound, proved but loose, is in

@@ -108,6 +108,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         last = whole_search(settings, Tally() if first is None else first.tally)
         if last.found:
             return steps.mode_found(last, window)
+    origin = last.target  # the whole search's shift, or the first search's when it was the last
     lower = []
     if last.eicp.status == "not_converged":
         last, lower = searches_below(settings, last)
@@ -119,7 +120,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
             return steps.mode_found(last, window)
     below = f" and from {len(lower)} lower shift(s) down to {lower[-1]:.3g}" if lower else ""
     widened = f", the last with nev = {settings.widened_nev}," if settings.widened_nev else ""
-    reasons.append(f"the search from σ = {settings.target:.6g}{below}{widened} over {last.tally.supports_visited} "
+    reasons.append(f"the search from σ = {origin:.6g}{below}{widened} over {last.tally.supports_visited} "
                    f"support(s) found no mode ({last.eicp.status})")
     if settings.full_budget is not None and (not settings.whole_search_left or last.eicp.status == "max_iterations"):
         # the caller's or the scene's budget, not the search, ended it: say which option

@@ -2,9 +2,9 @@
 (:mod:`meicp.petsc.eicp_active_set`).
 
 Its shift sits at an estimate of λ_max(sym A, sym B), which bounds the real part of every
-eigenvalue of every support's pencil, so the first pair it takes is the rightmost eigenvalue
-of the full support S = J — never the slow vibrations clustered just below 0 that a shift at
-0 returns; each support update follows that pair.  A returned mode is certified on the whole
+eigenvalue of every support's pencil, so the first pair it takes is the rightmost real
+eigenvalue of the full support S = J — never the slow vibrations clustered just below 0 that a
+shift at 0 returns; each support update follows that pair.  A returned mode is certified on the whole
 reduced problem.  The first search starts lower where the scene's contact-strip proxy has a
 real σ_p > 0 below the top (at ``PROXY_SHIFT``·σ_p: a contact mode's σ hardly depends on the
 lattice's size, and the top, a Ritz value of the symmetric part, can lie far above every
@@ -28,10 +28,11 @@ from dataclasses import dataclass, replace
 
 from ...core.errors import PetscOptionError
 from ...eicp.solve import solve_eicp
+from ..on_root import on_root
 from ..proxy import rightmost_real
 from .modes import FoundModes, certified_modes
 
-#: support updates of the first, short search from the window's top (before the proof), and
+#: support updates of the first, short search (before the proof), and
 #: the Krylov–Schur restarts each of its eigen-solves may take: a rightmost eigenvalue that is
 #: a mode stands apart and converges in a few, while one inside the cluster of slow vibrations
 #: is no mode and costs the most (docs/benchmarks-notes.md, "first search")
@@ -92,6 +93,8 @@ class SearchSettings:
     full_budget: int | None
     widened_nev: int | None
     started: float
+    #: the caller gave the shift (``target``): the first search keeps it
+    target_given: bool = False
 
     @property
     def target(self) -> float:
@@ -123,12 +126,14 @@ def search_settings(pen, scene, comm, lam_min: float, tol: float, options, shift
     eigenpair per solve, the scene's ``[petsc]`` options; ``max_iter`` (else the scene's) is
     the whole budget; ``nev`` (else the scene's) > 1 is the widened last search's."""
     keywords = dict(options)
+    given = "target" in keywords
     keywords.setdefault("target", shift)
     nev = keywords.pop("nev", None) or scene.solver.nev or 1
     keywords["nev"] = 1
     keywords.setdefault("options", dict(scene.petsc))
     full_budget = keywords.pop("max_iter", scene.solver.max_iterations or None)
-    return SearchSettings(pen, comm, lam_min, tol, keywords, full_budget, int(nev) if nev > 1 else None, started)
+    return SearchSettings(pen, comm, lam_min, tol, keywords, full_budget, int(nev) if nev > 1 else None, started,
+                          given)
 
 
 @dataclass(frozen=True)
@@ -171,9 +176,13 @@ def search(settings: SearchSettings, before: Tally, max_iter: int | None, *, fir
 
 def first_shift(settings: SearchSettings, scene, lines) -> tuple[float, str]:
     """``(shift, why)``: where the first search starts — PROXY_SHIFT times the rightmost real
-    eigenvalue of the scene's contact-strip proxy (:func:`~meicp.contact.proxy.rightmost_real`)
-    when that is below the window's top ``settings.target``, else the top."""
-    estimate = rightmost_real(scene, lines)
+    eigenvalue of the scene's contact-strip proxy (:func:`~meicp.contact.proxy.rightmost_real`,
+    computed on rank 0: the shift is collective) when that is below the window's top
+    ``settings.target``, else the top; the caller's own ``target`` when it gave one.
+    Collective."""
+    if settings.target_given:
+        return settings.target, "the caller's target"
+    estimate = on_root(settings.comm, lambda: rightmost_real(scene, lines))
     if estimate is None or not PROXY_SHIFT * estimate < settings.target:
         return settings.target, "the window's top"
     return PROXY_SHIFT * estimate, f"{PROXY_SHIFT:g}× the contact-strip proxy's rightmost real σ = {estimate:.6g}"
