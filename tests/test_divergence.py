@@ -3,7 +3,6 @@ the issue's table rows decided, and the large-problem path never contradicting e
 The tests read the verdict's fields (:class:`~meicp.contact.divergence.DivergenceProof`); each
 evidence sentence is checked once, by the test of the step that makes it."""
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -13,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import meicp
-from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of, search, sigma_window, steps
+from meicp.contact.divergence import DivergenceProof, Procedures, divergence_of, search, sigma_window
 from meicp.contact.divergence.condensed import CondensedProof, prove_no_divergence
 from meicp.contact.problem import pencil
 from meicp.contact import proxy
@@ -369,29 +368,3 @@ def test_why_no_sigma_max_was_certified():
         "(largest -1e-05; the top lies among the slow vibrations, where Lanczos stalls)")
     missed = sigma_window.TopEstimate(True, 2.5, True, 1.0, True)
     assert sigma_window.no_sigma_max(missed) == "no σ_max certified above the estimate 2.5 of λ_max(sym A, sym B)"
-
-
-def test_a_window_of_the_sliding_contacts_gives_a_rayleigh_quotient(monkeypatch):
-    """The window's top eigenvalue is one of a principal sub-pencil: never above λ_max(sym A,
-    sym B) of the whole pencil (dense here), above 0 where the Rayleigh bound at 0 fails (μ = 1.2,
-    slip−) and below where it proves (μ = 0.3, slip+); above 0 it spares the bound, whose step
-    then says why it was not tried."""
-    monkeypatch.setattr(sigma_window, "WINDOW_FROM", 0)
-    for mu, state, proves in ((1.2, "slip-", False), (0.3, "slip+", True)):
-        scene = _scene(60, (2, 2), state, mu)
-        with pencil(scene) as pen:
-            window = sigma_window.window_quotient(pen)
-            A, B = pen.A.toarray(), pen.B.toarray()
-            # as where the short Lanczos run shows no Ritz value above 0 (the window's case)
-            top = dataclasses.replace(sigma_window.probe_top(pen.A, pen.B), positive=False)
-            verdict, why = steps.bound_at_zero(pen.A, pen.B, top, 0.0, window)
-        whole = np.linalg.eigvals(np.linalg.solve(0.5 * (B + B.T), 0.5 * (A + A.T))).real.max()
-        assert window <= whole + 1e-12 * abs(whole)
-        assert (window < 0) == proves
-        if not proves:
-            assert verdict is None and "principal sub-pencil" in why
-        else:
-            assert verdict is not None and verdict.proof.test == "rayleigh-inertia"
-    with pencil(_scene(60, (2, 2), "slip-", 1.2)) as pen:
-        monkeypatch.setattr(sigma_window, "WINDOW_FROM", 10 ** 9)
-        assert sigma_window.window_quotient(pen) is None  # below the size where it pays

@@ -5,9 +5,7 @@ Small reduced problems are enumerated (:mod:`.enumeration`).  Larger ones go thr
 window procedure, cheapest first, one step each (:mod:`.steps`):
 
 1. **Rayleigh bound at 0** (one LDLᵀ), unless a short Lanczos run on (sym A, sym B), made
-   first (:func:`.sigma_window.probe_top`), has a Ritz value θ > 0, or a principal sub-pencil
-   on a window of the sliding contacts has an eigenvalue above 0
-   (:func:`.sigma_window.window_quotient`): either is a Rayleigh quotient.
+   first (:func:`.sigma_window.probe_top`), has a Ritz value θ > 0.
 2. **First search**: a short active-set search (:mod:`.search`) from the contact-strip
    proxy's rightmost real σ (times :data:`.search.PROXY_SHIFT`) when below the window's top θ,
    else from θ; only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
@@ -41,7 +39,7 @@ from . import steps
 from .condensed import prove_no_divergence
 from .enumeration import enumeration_is_small, named_method_verdict
 from .search import Tally, first_search, search_settings, searches_below, whole_search, widened_search
-from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate, window_quotient
+from .sigma_window import certified_sigma_max, no_sigma_max, probe_top, ritz_estimate
 from .verdict import DivergenceVerdict
 
 log = logging.getLogger("meicp")
@@ -83,8 +81,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     A, B = pen.A, pen.B
     started = time.perf_counter()
     top = probe_top(A, B, procedures.estimate_top)
-    window = None if top.positive or not top.b_definite else window_quotient(pen)
-    verdict, why = steps.bound_at_zero(A, B, top, started, window)
+    verdict, why = steps.bound_at_zero(A, B, top, started)
     if verdict is not None:
         return verdict
     reasons = [why]

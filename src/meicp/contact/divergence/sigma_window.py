@@ -20,15 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-import numpy as np
-import scipy.linalg as sl
-
-from ...core.matrix import max_abs_entry, to_dense
-from ...petsc.assembly import principal_submatrix
+from ...core.matrix import max_abs_entry
 from ...petsc.lanczos import largest_ritz_value
-from ..lines import ContactState
-from ..on_root import on_root
-from ..proxy import sliding_window
 from ..rayleigh import rayleigh_bound, symmetric_part_definite
 
 #: a Ritz value of (sym A, sym B) above this multiple of max|A|/max|B| is positive beyond
@@ -89,65 +82,6 @@ def probe_top(A, B, estimate=ritz_estimate) -> TopEstimate:
     theta, converged = estimate(A, B, max_it=PROBE_RESTARTS)[:2] if b_definite else (math.nan, False)
     scale = max_abs_entry(A) / max(max_abs_entry(B), 1e-300)
     return TopEstimate(b_definite, theta, converged, scale, theta > RITZ_POSITIVE * scale)
-
-
-#: the window of :func:`window_quotient`: columns along the sliding contact line, and rows on
-#: each side of it (the base's: above it); a window of 64 × (8 + 8) nodes shows the positive
-#: top of sym(A) of `extensive_interface.toml` (+0.0083), one of 32 × (4 + 4) does not (−0.09):
-#: docs/benchmarks-notes.md, "window quotient"
-WINDOW_COLUMNS = 64
-WINDOW_ROWS = 8
-#: ... tried from this many retained DOFs: its dense solve (order ~2,000) costs about a second,
-#: the LDLᵀ it may spare costs less below (0.1 s at 10⁴ DOFs, 3–7 s at 10⁶)
-WINDOW_FROM = 200_000
-
-
-def window_quotient(pen) -> float | None:
-    """The largest eigenvalue of the principal sub-pencil ``(sym A_SS, sym B_SS)`` on the
-    reduced DOFs S of the nodes in a window around the sliding contact line with the most slips
-    (:data:`WINDOW_COLUMNS` × :data:`WINDOW_ROWS` on each side, where most of them slip): a
-    Rayleigh quotient of ``(sym A, sym B)`` (x zero off S), so a value above 0 shows that sym(A)
-    is not negative definite — the Rayleigh bound at 0 cannot prove anything — without the
-    LDLᵀ of the whole pencil.  None: no sliding contact, fewer than :data:`WINDOW_FROM` retained
-    DOFs (the LDLᵀ is cheaper than this), or the dense solve failed.  Computed on rank 0 from
-    the gathered submatrices.  Collective."""
-    lines = [line for line in pen.lines if line.states is not None]
-    slips = [sum(ContactState(s).slip_sign != 0 for s in line.states) for line in lines]
-    if not lines or max(slips) == 0 or pen.maps.retained.size < WINDOW_FROM:
-        return None
-    line = lines[int(np.argmax(slips))]
-    model = pen.lattice.model
-    width = min(WINDOW_COLUMNS, line.size)
-    first = sliding_window(line.states, width)
-    columns = np.asarray(line.upper[first:first + width]) % model.nx
-    row = int(line.upper[0]) // model.nx
-    rows = np.arange(max(row - WINDOW_ROWS, 0), min(row + WINDOW_ROWS, model.ny))
-    window = (rows[:, None] * model.nx + columns[None, :]).ravel()
-    keep = np.flatnonzero(np.isin(np.asarray(pen.maps.retained) // 2, window))
-    if keep.size == 0:
-        return None
-    A_SS, B_SS = _principal(pen.A, keep), _principal(pen.B, keep)
-
-    def top() -> float | None:
-        S, SB = 0.5 * (A_SS + A_SS.T), 0.5 * (B_SS + B_SS.T)
-        try:
-            n = S.shape[0]
-            return float(sl.eigh(S, SB, eigvals_only=True, subset_by_index=[n - 1, n - 1])[0])
-        except (np.linalg.LinAlgError, ValueError):  # sym(B_SS) not positive definite
-            return None
-
-    return on_root(pen.comm, top)
-
-
-def _principal(M, keep: np.ndarray) -> np.ndarray:
-    """``M[keep, keep]`` dense on every rank (SciPy or a distributed PETSc Mat)."""
-    if hasattr(M, "tocsr"):
-        return M.tocsr()[keep][:, keep].toarray()
-    sub = principal_submatrix(M, keep)
-    try:
-        return to_dense(sub)
-    finally:
-        sub.destroy()
 
 
 def certified_sigma_max(A, B, top: TopEstimate, estimate=ritz_estimate) -> tuple[float | None, TopEstimate]:

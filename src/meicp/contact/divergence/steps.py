@@ -11,7 +11,7 @@ import time
 from ..friction_range import proved_friction_range
 from ..rayleigh import rayleigh_bound
 from .search import SearchOutcome
-from .sigma_window import RITZ_POSITIVE, TopEstimate
+from .sigma_window import TopEstimate
 from .verdict import DivergenceProof, DivergenceVerdict
 
 log = logging.getLogger("meicp")
@@ -23,22 +23,14 @@ def _window_proof(test: str, statement: str, sigma_window, outcome: SearchOutcom
                            eigen_solves=tally[1], **more)
 
 
-def bound_at_zero(A, B, top: TopEstimate, started: float, window: float | None = None
-                  ) -> tuple[DivergenceVerdict | None, str]:
+def bound_at_zero(A, B, top: TopEstimate, started: float) -> tuple[DivergenceVerdict | None, str]:
     """1. The Rayleigh bound at 0 — ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` proves that no σ ≥ 0
     exists (one factorisation; any pencil, interfaces included) — unless the short run's
-    Ritz value θ > 0, or the top ``window`` of a principal sub-pencil
-    (:func:`.sigma_window.window_quotient`), already rules it out (each is a Rayleigh
-    quotient).  Returns the proof's verdict, or None and why it stopped."""
+    Ritz value θ > 0 already rules it out (θ is a Rayleigh quotient).  Returns the proof's
+    verdict, or None and why it stopped."""
     if top.positive:
         return None, (f"Rayleigh bound at 0: not tried, the Ritz value θ = {top.theta:.6g} > 0 of (sym A, sym B) is a "
                       "Rayleigh quotient: sym(A) is not negative definite")
-    if window is not None and window > RITZ_POSITIVE * top.scale:
-        log.info("divergence: Rayleigh bound at 0 not tried: a window's Rayleigh quotient %.6g > 0 (%.2f s)", window,
-                 time.perf_counter() - started)
-        return None, (f"Rayleigh bound at 0: not tried, a principal sub-pencil of (sym A, sym B) on a window of the "
-                      f"sliding contacts has the eigenvalue {window:.6g} > 0, a Rayleigh quotient: sym(A) is not "
-                      "negative definite")
     at_zero = rayleigh_bound(A, B, 0.0, decisive=False)
     log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
              time.perf_counter() - started)
