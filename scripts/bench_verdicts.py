@@ -212,7 +212,7 @@ def first(args):
             if steps.bound_at_zero(pen.A, pen.B, top, started)[0] is None:
                 settings = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, top.shift, started)
                 row.update(first_search=True, **_timed_first(settings, "first"))
-                shift, _ = search.first_shift(settings, scene, pen.lines)
+                shift, _ = search.first_shift(settings, scene)
                 if shift != settings.target:  # the driver's first search, from the proxy's estimate
                     row.update(proxy_shift=f"{shift:.6g}", **_timed_first(settings.from_shift(shift), "proxy"))
         r = meicp.analyze(scene, flutter=False)

@@ -104,9 +104,9 @@ def test_the_first_search_starts_at_the_top_when_the_proxy_estimate_is_not_below
     with pencil(scene) as pen:
         estimate = proxy.rightmost_real(scene, pen.lines)
         low = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, estimate, 0.0)
-        assert search.first_shift(low, scene, pen.lines) == (estimate, "the window's top")
+        assert search.first_shift(low, scene) == (estimate, "the window's top")
         high = low.from_shift(10 * estimate)
-        shift, why = search.first_shift(high, scene, pen.lines)
+        shift, why = search.first_shift(high, scene)
         assert shift == search.PROXY_SHIFT * estimate and "proxy" in why
     banded = meicp.load_scene(ROOT / "data" / "scenes" / "embedded_on_base.toml")
     with pencil(banded) as pen:
@@ -126,7 +126,7 @@ def test_the_proxy_estimate_is_skipped_where_it_would_mislead_or_fail():
     scene = _scene(60, (2, 2), "slip-", 3.0)
     with pencil(scene) as pen:
         given = search.search_settings(pen, scene, None, 0.0, 1e-10, {"target": 5.0}, 1.0, 0.0)
-        assert search.first_shift(given, scene, pen.lines) == (5.0, "the caller's target")
+        assert search.first_shift(given, scene) == (5.0, "the caller's target")
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():

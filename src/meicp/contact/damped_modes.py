@@ -98,8 +98,7 @@ def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
     if not top.positive:
         return [], (f"the window's top θ = {top.theta:.6g} of (sym A, sym B) is not above 0: the undamped short "
                     "search would start among the slow vibrations, so none was made")
-    outcome = first_search(search_settings(pen, scene, comm, 0.0, tol, options, top.shift, started), scene,
-                           pen.lines)
+    outcome = first_search(search_settings(pen, scene, comm, 0.0, tol, options, top.shift, started), scene)
     solutions = sorted((s for s in getattr(outcome.eicp, "solutions", None) or [] if s.lam >= 0),
                        key=lambda s: -s.lam)[:FOLLOWED]
     return solutions, (f"the undamped short search from σ = {outcome.target:.6g} found "

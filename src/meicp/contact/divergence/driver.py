@@ -86,7 +86,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
         return verdict
     reasons = [why]
     settings = search_settings(pen, scene, comm, lam_min, tol, options, top.shift, started)
-    first = first_search(settings, scene, pen.lines) if top.positive else None
+    first = first_search(settings, scene) if top.positive else None
     if first is not None and first.found:
         return steps.mode_found(first, None)
     condensed = steps.condensed_proof(pen, comm, tol, procedures.prove, started)
