@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from ..core.comm import mpi_comm
 from . import import_petsc, import_slepc, mumps_c
 from .mat import mat_from_local_csr, vec_to_numpy
-from .options import FLUTTER, OptionsScope, mumps_controls
+from .options import FLUTTER, OptionsScope, mumps_controls, st_low_rank, st_node_pairs
 
 _J2 = sp.csr_matrix(np.array([[0.0, 1.0], [-1.0, 0.0]]))
 _I2 = sp.identity(2, format="csr")
@@ -56,8 +56,7 @@ def _with_basis_and_low_rank(defaults: dict, ncv: int | None, low_rank: float | 
     CNTL(7) = ``low_rank``), added to either form's defaults."""
     if ncv:
         defaults["eps_ncv"] = ncv
-    if low_rank:
-        defaults.update(st_mat_mumps_icntl_35=2, st_mat_mumps_cntl_7=low_rank)
+    defaults.update(st_low_rank(low_rank))
     return defaults
 
 
@@ -241,7 +240,7 @@ def complex_defaults(nev: int, ncv: int | None, tol: float, *, n: int = 1, low_r
     even — none when odd, since blocks that do not divide the order give a wrong factor
     without an error; ``low_rank``: block-low-rank factor and solves at that CNTL(7)."""
     defaults = {"eps_type": "krylovschur", "eps_non_hermitian": True, "eps_largest_magnitude": True,
-                "eps_nev": nev, "eps_tol": tol, "eps_max_it": max_it, "st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
+                "eps_nev": nev, "eps_tol": tol, "eps_max_it": max_it, **st_node_pairs(n)}
     return _with_basis_and_low_rank(defaults, ncv, low_rank)
 
 

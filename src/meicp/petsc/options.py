@@ -275,6 +275,19 @@ def options_used(name: str) -> bool:
     return bool(flag.value)
 
 
+def st_low_rank(low_rank: float | None) -> dict:
+    """Code defaults (spectral-transform prefix) for a block-low-rank MUMPS factor and solves
+    (ICNTL(35) = 2) at the dropping tolerance ``low_rank`` (CNTL(7)); none for None."""
+    return {"st_mat_mumps_icntl_35": 2, "st_mat_mumps_cntl_7": low_rank} if low_rank else {}
+
+
+def st_node_pairs(n: int) -> dict:
+    """Code defaults (spectral-transform prefix) making MUMPS analyse the graph of DOF pairs,
+    a lattice node (ICNTL(15) = −2), for a matrix of even order ``n``; none (0) for an odd one,
+    whose order the block does not divide (MUMPS 5.5 refuses it, INFOG(1) = −57)."""
+    return {"st_mat_mumps_icntl_15": -2 if n % 2 == 0 else 0}
+
+
 def mumps_controls(head: str) -> tuple[dict, dict]:
     """``(icntl, cntl)``: the ``-<head>icntl_<k>`` / ``-<head>cntl_<k>`` values in the options
     database (e.g. head ``meicp_schur_mat_mumps_``), by MUMPS number, for the MUMPS instances

@@ -22,11 +22,11 @@ import numpy as np
 
 from . import import_petsc, import_slepc
 from .mat import vec_to_numpy
-from .options import ACTIVE_SET, OptionsScope, petsc_errors, report_unused
+from .options import ACTIVE_SET, OptionsScope, petsc_errors, report_unused, st_low_rank, st_node_pairs
 
 #: MUMPS factors A − τB block-low-rank at this dropping tolerance (ICNTL(35) = 2, CNTL(7)) and
-#: on the graph of node pairs (ICNTL(15) = −2, when the order is even: MUMPS 5.5 refuses an
-#: order the block does not divide, INFOG(1) = −57), as the flutter search does
+#: on the graph of node pairs (ICNTL(15) = −2 for an even order: `options.st_node_pairs`), as
+#: the flutter search does
 #: (`meicp.petsc.flutter.LOW_RANK_TOL`): the shipped 10⁶-DOF `extensive_contact.toml`, whose
 #: first search converges in one restart, spent 29.6 s in the divergence verdict full rank,
 #: 24.0 s block-low-rank, 20.8 s with both, the same certified mode (residual 1.8e-15)
@@ -75,11 +75,9 @@ class ReducedPencilSolver:
             # AMF ordering: Debian's MUMPS has no METIS/SCOTCH and picks PORD, which was
             # 1.05-1.36x slower per eigen-solve from 3e5 to 1e6 DOFs (docs/benchmarks.md, scaling)
             "st_mat_mumps_icntl_7": 2,
-            "st_mat_mumps_icntl_35": 2,
-            "st_mat_mumps_cntl_7": SEARCH_LOW_RANK,
+            **st_low_rank(SEARCH_LOW_RANK),
+            **st_node_pairs(A.getSize()[0]),
         }
-        if A.getSize()[0] % 2 == 0:
-            defaults["st_mat_mumps_icntl_15"] = -2
         defaults["eps_gen_hermitian" if symmetric else "eps_gen_non_hermitian"] = True
         self._defaults = defaults
         self._options = options
