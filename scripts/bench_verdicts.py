@@ -25,10 +25,10 @@ import argparse
 import os
 import time
 
+import meicp  # before NumPy: it sets OpenBLAS's kernel for this CPU (meicp.core.blas_kernel)
 import numpy as np
 
 from bench_common import csv_path, scatter_verdicts, slepc_eigensolve, write_rows
-import meicp
 from meicp.contact import pencil
 from meicp.contact.divergence import search, sigma_window, steps
 from meicp.core.matrix import is_petsc_mat

@@ -261,10 +261,11 @@ def test_a_target_where_nothing_converges_within_its_restarts_is_moved_off(monke
     """Inside a cluster Krylov–Schur may converge nothing in SEARCH_RESTARTS restarts: the
     target moves off it, and only the last one gets LAST_RESTARTS."""
     real = fl.complex_shift_solve
-    caps = []
+    caps, bases = [], []
 
     def nothing_first(ops, tau, **kw):
         caps.append(kw["max_it"])
+        bases.append(kw["ncv"])
         pairs, info = real(ops, tau, **kw)
         return ([] if len(caps) == 1 else pairs), info
 
@@ -275,10 +276,99 @@ def test_a_target_where_nothing_converges_within_its_restarts_is_moved_off(monke
         got = fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12)
     assert got.flutter is True and got.counts["moved"] == 1 and "restarts" in got.evidence
     assert caps == [fl.SEARCH_RESTARTS, fl.LAST_RESTARTS]
+    # the target moved off is searched with a wide basis: a narrow one cannot separate the
+    # cluster's top edge (docs/benchmarks-notes.md, "RETRY_NCV")
+    assert bases == [12, fl.RETRY_NCV] and f"basis of at least {fl.RETRY_NCV}" in got.evidence
     caps.clear()
     with pencil(scene) as pen:
         fl.search_flutter(pen.A, pen.B, [tau], nev=2, ncv=12, off_cluster_tries=0)
     assert caps == [fl.LAST_RESTARTS]
+
+
+def test_real_ritz_values_of_the_real_form_are_skipped():
+    """A real Ritz value θ of the real 2n form puts σ = τ + 1/θ exactly on the horizontal line
+    through τ — what Krylov–Schur converges next to a target inside a cluster of
+    ill-conditioned eigenvalues (pseudo-pairs): skipped and counted, the complex one kept."""
+    from meicp.petsc import import_petsc
+    from meicp.petsc.flutter import converged_pairs
+
+    PETSc = import_petsc()
+    template = PETSc.Mat().createAIJ((6, 6), nnz=1, comm=PETSc.COMM_SELF)
+    template.assemble()
+
+    class TwoRitzValues:  # the EPS calls converged_pairs makes
+        values = [2.0 + 0j, 1.0 + 1.0j, 1.0 - 1.0j]
+
+        def getConverged(self):
+            return len(self.values)
+
+        def getIterationNumber(self):
+            return 1
+
+        def getEigenvalue(self, i):
+            return self.values[i]
+
+        def getEigenvector(self, i, zr, zi):
+            zr.set(1.0)
+            zi.set(0.25)
+
+    tau = -1.0 + 0.5j
+    try:
+        pairs, info = converged_pairs(TwoRitzValues(), template, tau, inverted=True, residual=lambda s, x: 0.0,
+                                      gather=lambda x: x, comm=None)
+    finally:
+        template.destroy()
+    assert info["real_ritz"] == 1 and info["nconv"] == 3 and len(pairs) == 1
+    assert pairs[0][0] == pytest.approx(tau + 1 / (1.0 + 1.0j)) or pairs[0][0] == pytest.approx(
+        (tau.conjugate() + 1 / (1.0 + 1.0j)).conjugate())
+    assert info["radius"] == pytest.approx(abs(1 / (1.0 + 1.0j)))
+
+
+def test_pseudo_pairs_following_the_target_get_no_stricter_solve():
+    """Pairs that all lie within FOLLOWING·|τ| of the target are pseudo-pairs: when none passes
+    the gate the search moves on at once instead of solving again at the strict tolerance;
+    pairs spread over the disk still get the stricter solve."""
+    from meicp.petsc.flutter import FOLLOWING, following, solve_tightened
+
+    tau = -2.5 + 0.5j
+
+    class Vec:
+        def destroy(self):
+            pass
+
+    class Template:
+        def createVecRight(self):
+            return Vec()
+
+    class Loose:  # an EPS that counts its solves
+        solves = 0
+
+        def solve(self):
+            self.solves += 1
+
+        def getTolerances(self):
+            return (1e-8, 100)
+
+        def getConverged(self):
+            return 1
+
+        def getEigenvector(self, i, zr, zi):
+            pass
+
+        def setTolerances(self, tol):
+            pass
+
+        def setInitialSpace(self, vectors):
+            pass
+
+    for values, solves in (([tau + 0.1 * FOLLOWING, tau - 0.5j * FOLLOWING], 1), ([tau + 0.01, tau], 2)):
+        eps = Loose()
+        pairs = [(v, None, 1e-9) for v in values]
+        _, info = solve_tightened(eps, lambda: (pairs, {"iterations": 1}), Template(), 1e-10, 1e-10, [],
+                                  pseudo=lambda p: following(p, tau))
+        assert eps.solves == solves and info["solves"] == solves
+        assert following(pairs, tau) is (solves == 1)
+    assert not following([], tau)
 
 
 def test_the_factors_are_analysed_in_node_blocks_only_when_they_divide_the_order():
