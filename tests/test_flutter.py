@@ -620,6 +620,45 @@ def test_sliding_window_picks_the_middlemost_window_with_most_slips():
     assert strip.sliding_window(["stick"] * 9, 3) == 3
 
 
+def _three_layers(nx, rows=(6, 6, 6)):
+    """Issue 29's shallow scene: k 1 / 3 / 1, ρ 1 / 1 / 2, on a rough base at μ = 0.3, slip−."""
+    return scene_from_dict({"lattice": {"nx": nx, "spacing": 1.0, "shear": 0.4},
+                            "layers": [{"name": n, "rows": r, "stiffness": k, "density": d}
+                                       for n, r, k, d in zip("ABC", rows, (1.0, 3.0, 1.0), (1.0, 1.0, 2.0))],
+                            "boundary": {"top": "fixed", "bottom": "contact", "left": "free", "right": "free"},
+                            "contact": {"friction": 0.3, "states": "slip-"}})
+
+
+def test_a_shallow_lattice_is_searched_from_its_whole_depth_too():
+    """The fastest flutter modes of a shallow lattice span its depth: the 8-row base strip's
+    targets miss them (27 % of QZ's fastest here), the whole-depth proxy's targets, moved up
+    off their cluster, find QZ's fastest mode itself."""
+    scene = _three_layers(48)
+    with pencil(scene) as pen:
+        ref = fl.pencil_flutter(pen, scene)  # dense: 1,584 retained DOFs
+        strip_only = fl.pencil_flutter(pen, scene, dense_max=0,
+                                       targets=fl.proxy_targets(scene, pen.lines, 3, depth=False))
+        got = fl.pencil_flutter(pen, scene, dense_max=0)
+    fastest = max(growth_frequency(m.sigma)[0] for m in ref.modes)
+    found = [growth_frequency(m.sigma)[0] for m in got.modes]
+    assert ref.complete and got.flutter is True
+    assert max(growth_frequency(m.sigma)[0] for m in strip_only.modes) < 0.5 * fastest
+    assert max(found) == pytest.approx(fastest, rel=1e-8)
+    assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
+
+
+def test_the_depth_proxy_is_the_whole_depth_of_a_shallow_scene_only():
+    """More rows than the base strip's and at most DEPTH_PROXY_ROWS: every row, PROXY_NX
+    columns from the middle, the scene's own boundary; else none."""
+    for rows, whole in (((6, 6, 6), True), ((3, 3, 2), False), ((9, 9, 9), False)):
+        scene = _three_layers(100, rows)
+        proxy = strip.depth_proxy(scene, ["slip-"] * 100)
+        assert (proxy is not None) is whole
+        if whole:
+            assert proxy.nx == strip.PROXY_NX and proxy.ny == scene.ny and proxy.boundary == scene.boundary
+            assert proxy.contact.states == ("slip-",) * strip.PROXY_NX
+
+
 def test_interface_proxy_targets_give_certified_modes_and_only_a_lower_bound():
     """A frictional interface has its own strip proxy (rows on both sides of it): the search
     from its targets certifies modes that QZ finds on the whole pencil, and its fastest is

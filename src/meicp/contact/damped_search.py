@@ -30,7 +30,7 @@ from .flutter_growth import quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
-                             memory_refusal, search_conclusion)
+                             memory_refusal, real_ritz_note, search_conclusion)
 from .lines import BASE
 from .proxy import PROXY_NX, PROXY_ROWS
 
@@ -141,7 +141,7 @@ def growth_ceiling(ops: QuadraticPencilOps) -> tuple[float, str] | None:
 
 
 def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solve) -> PencilFlutter:
-    modes, rejected, disks, borderline, moved = [], [], [], 0, []
+    modes, rejected, disks, borderline, moved, real_ritz = [], [], [], 0, [], 0
     for lam0 in targets:
         lam0 = complex(lam0)
         lam0 = lam0.conjugate() if lam0.imag < 0 else lam0
@@ -149,6 +149,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
             pairs, info = quadratic_shift_solve(ops, lam0, gate=RESIDUAL_TOL,
                                                 give_up=(GIVE_UP_RESTARTS, GIVE_UP_BUDGET), **solve)
             passed = sum(res <= RESIDUAL_TOL for _, _, res in pairs)
+            real_ritz += info.get("real_ritz", 0)
             disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"], info["gave_up"]))
             for lam, x, res in pairs:
                 r = lambda_margin(ops, lam, res)
@@ -170,7 +171,8 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
                 break
             moved.append((lam0, moved_off(lam0, attempt)))
             lam0 = moved[-1][1]
-    counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved)}
+    counts = {"targets": len(disks), "rejected": len(rejected), "borderline": borderline, "moved": len(moved),
+              "real_ritz": real_ritz}
     text = "; ".join(f"|λ − ({t.real:.4g}{t.imag:+.4g}i)| ≤ {r:.3g} ({k} λ, {p} passing the residual gate, "
                      f"{it} restarts" + (f", given up: {gave_up}" if gave_up else "") + ")"
                      for t, r, k, p, it, gave_up in disks)
@@ -178,7 +180,8 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
                   f"{b:.4g}" for a, b in moved)
     evidence = (f"damped: complex shift-and-invert on the companion form of λ²B + λD − A at {len(disks)} target(s)"
                 f"{why}{off}: the eigenvalues SLEPc converged in {text}"
-                + (f"; {len(rejected)} pair(s) failed the residual gate {RESIDUAL_TOL:g}" if rejected else ""))
+                + (f"; {len(rejected)} pair(s) failed the residual gate {RESIDUAL_TOL:g}" if rejected else "")
+                + real_ritz_note(real_ritz, "λ − λ₀"))
     evidence += search_conclusion(modes)
     growth = search_growth(modes, "the damped search computes only the eigenvalues near its targets",
                            ceiling=ceiling)

@@ -43,7 +43,7 @@ from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             SEARCH_TARGETS, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, FlutterVerdict, PencilFlutter,
-                             RejectedPair, memory_refusal, search_conclusion)
+                             RejectedPair, memory_refusal, real_ritz_note, search_conclusion)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
@@ -166,8 +166,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     f"converged in {text}"
                     + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
                     + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else "")
-                    + (f"; {real_ritz} real Ritz value(s) of the real form skipped (σ − τ real: pseudo-pairs next "
-                       "to the target)" if real_ritz else ""))
+                    + real_ritz_note(real_ritz, "σ − τ"))
     evidence += search_conclusion(modes)
     rectangle = None if bound is None or real_max is None else (real_max, bound, real_how)
     growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets", rectangle)

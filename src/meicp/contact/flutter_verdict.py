@@ -86,6 +86,14 @@ def memory_refusal(comm, need: float, what: str) -> PencilFlutter | None:
         f"{where}: undecided"), growth=FlutterGrowth(0.0, None, "not searched (memory): no bound"))
 
 
+def real_ritz_note(count: int, offset: str) -> str:
+    """The evidence's note on the real Ritz values of a search's real form that were skipped
+    (``offset``: the shifted variable, real for them), "" when none was."""
+    if not count:
+        return ""
+    return f"; {count} real Ritz value(s) of the real form skipped ({offset} real: pseudo-pairs next to the target)"
+
+
 def search_conclusion(modes: list) -> str:
     """What a search past the dense limit concludes, the end of its evidence sentence: it
     proves flutter with a certified mode, never its absence nor the fastest growth."""

@@ -21,6 +21,9 @@ from .problem import pencil
 PROXY_NX = 32
 PROXY_ROWS = 8
 PROXY_NEAR_ROWS = 3
+#: a scene of at most this many node rows also gets a proxy of its whole depth
+#: (:func:`depth_proxy`; 32 × 24 nodes: about 1,500 DOFs, a few seconds of dense QR)
+DEPTH_PROXY_ROWS = 24
 
 
 def _take_rows(layers, budget: int) -> list:
@@ -48,6 +51,21 @@ def strip_proxy(scene, base_states):
         scene, lattice=dataclasses.replace(scene.lattice, nx=nx), layers=tuple(kept),
         interfaces=tuple(i for i in scene.interfaces if i.index < len(kept) - 1),
         boundary=dataclasses.replace(scene.boundary, top="fixed") if cut else scene.boundary,
+        contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
+
+
+def depth_proxy(scene, base_states):
+    """The contact-strip proxy with every row of the lattice: :data:`PROXY_NX` columns from the
+    middle of the base, the whole depth — for a shallow scene (at most
+    :data:`DEPTH_PROXY_ROWS` rows, more than the strip's :data:`PROXY_ROWS`), whose fastest
+    flutter modes may span its depth, not the rows next to the contact.  None otherwise, or
+    where :func:`strip_proxy` has none."""
+    if not PROXY_ROWS < scene.ny <= DEPTH_PROXY_ROWS or strip_proxy(scene, base_states) is None:
+        return None
+    nx = min(scene.nx, PROXY_NX)
+    start = (len(base_states) - nx) // 2
+    return dataclasses.replace(
+        scene, lattice=dataclasses.replace(scene.lattice, nx=nx),
         contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
 
 
