@@ -10,8 +10,9 @@ fastest growth (docs/flutter.md, "Targets").
 Scenes: two layers with an unbonded frictional interface (k = 1 under k = 6 or 2, ρ 1 / 2),
 bottom and top fixed, every pair in one slip state.  ``depth``: shallow lattices on a rough
 base (three layers k 1 / 3 / 1, ρ 1 / 1 / 2, 6 rows each, issue 29's; two layers k 1 / 5),
-every base node in one slip state, the search from the base-strip proxy's targets alone
-against the search with the whole-depth proxy's targets too.
+every base node in one slip state, and the interface scenes above with more than 8 rows: the
+search from the strip proxy's targets alone against the search with the whole-depth proxy's
+targets too.
 """
 
 from __future__ import annotations
@@ -36,18 +37,22 @@ CASES = [(48, 5, 6, 1.0, "slip+"), (64, 4, 6, 1.0, "slip-"), (64, 6, 2, 2.0, "sl
          (40, 8, 6, 1.0, "slip+"), (60, 6, 2, 5.0, "slip-"), (150, 6, 6, 1.0, "slip+")]
 
 
-DEPTH_FIELDS = ["scene", "nx", "rows", "mu", "state", "shear", "retained", "qz_growth", "strip_growth", "depth_growth",
+DEPTH_FIELDS = ["scene", "nx", "rows", "mu", "state", "shear", "k_upper", "retained", "qz_growth", "strip_growth", "depth_growth",
                 "strip_fraction", "depth_fraction", "qz_s", "strip_s", "depth_s"]
-#: (label, nx, rows of each layer, μ, state, shear)
+#: (label, nx, rows of each layer, μ, state, shear — for an interface, "itf", the upper layer's k)
 DEPTH_CASES = [("three", 40, (6, 6, 6), 0.3, "slip-", 0.4), ("three", 48, (6, 6, 6), 0.3, "slip-", 0.4),
                ("three", 64, (6, 6, 6), 0.3, "slip-", 0.4), ("three", 100, (6, 6, 6), 0.3, "slip-", 0.4),
                ("two", 80, (6, 6), 1.0, "slip+", 0.0), ("two", 100, (5, 5), 2.0, "slip-", -0.3),
-               ("two", 60, (8, 8), 0.5, "slip+", 0.5), ("three", 80, (4, 6, 4), 1.0, "slip+", 0.0)]
+               ("two", 60, (8, 8), 0.5, "slip+", 0.5), ("three", 80, (4, 6, 4), 1.0, "slip+", 0.0),
+               *(("itf", nx, (ny, ny), mu, state, k) for nx, ny, k, mu, state in CASES if 8 < 2 * ny)]
 
 
 def _shallow(label, nx, rows, mu, state, shear):
     if label == "two":
         return two_layer_scene(nx, rows, mu=mu, states=state, shear=shear)
+    if label == "itf":
+        return two_layer_scene(nx, rows, bottom="fixed", stiffness=(1.0, float(shear)),
+                               interface={"kind": "frictional", "friction": mu, "states": state})
     return scene_from_dict({"lattice": {"nx": nx, "spacing": 1.0, "shear": shear},
                             "layers": [{"name": n, "rows": r, "stiffness": k, "density": d}
                                        for n, r, k, d in zip("ABC", rows, (1.0, 3.0, 1.0), (1.0, 1.0, 2.0))],
@@ -68,16 +73,18 @@ def depth():
                 out[name] = (_fastest(fl.pencil_flutter(pen, scene, **kw)), time.perf_counter() - t0)
             n = int(pen.maps.retained.size)
         qz = out["qz"][0]
-        rows.append(dict(scene=label, nx=nx, rows="+".join(map(str, layers)), mu=mu, state=state, shear=shear,
-                         retained=n, qz_growth=qz, strip_growth=out["strip"][0], depth_growth=out["depth"][0],
+        interface = label == "itf"
+        rows.append(dict(scene=label, nx=nx, rows="+".join(map(str, layers)), mu=mu, state=state,
+                         shear=0.0 if interface else shear, k_upper=shear if interface else "", retained=n, qz_growth=qz, strip_growth=out["strip"][0], depth_growth=out["depth"][0],
                          strip_fraction=out["strip"][0] / qz, depth_fraction=out["depth"][0] / qz,
                          qz_s=out["qz"][1], strip_s=out["strip"][1], depth_s=out["depth"][1]))
         print(rows[-1], flush=True)
     path = csv_path("flutter_depth")
     write_rows(path, rows, DEPTH_FIELDS, keep=lambda row: False)
-    bars(rows, path.with_suffix(".png"), [("strip_fraction", "base-strip proxy targets (8 rows)"),
+    bars(rows, path.with_suffix(".png"), [("strip_fraction", "strip proxy targets (8 rows)"),
                                           ("depth_fraction", "with the whole-depth proxy's targets")],
-         lambda r: f"{r['scene']} {r['nx']}×\n{r['rows']}\nμ{r['mu']:g} {r['state']}\nshear {r['shear']:+g}",
+         lambda r: f"{r['scene']} {r['nx']}×\n{r['rows']}\nμ{r['mu']:g} {r['state']}\n"
+                   + (f"k {r['k_upper']:g}" if r["k_upper"] != "" else f"shear {r['shear']:+g}"),
          "flutter search on shallow lattices: fastest found vs the fastest (QZ)")
 
 

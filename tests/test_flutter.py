@@ -648,15 +648,27 @@ def test_a_shallow_lattice_is_searched_from_its_whole_depth_too():
 
 
 def test_the_depth_proxy_is_the_whole_depth_of_a_shallow_scene_only():
-    """More rows than the base strip's and at most DEPTH_PROXY_ROWS: every row, PROXY_NX
-    columns from the middle, the scene's own boundary; else none."""
+    """More rows than the strip's and at most DEPTH_PROXY_ROWS: every row, PROXY_NX columns
+    (the base's middle, or where the interface slides), the scene's own boundary; else none."""
+    from meicp.contact.lines import contact_lines
+    from meicp.lattice.model import LatticeModel
+
     for rows, whole in (((6, 6, 6), True), ((3, 3, 2), False), ((9, 9, 9), False)):
         scene = _three_layers(100, rows)
-        proxy = strip.depth_proxy(scene, ["slip-"] * 100)
+        lines = contact_lines(scene, LatticeModel(scene))
+        proxy, near = strip.proxy_of(scene, lines, whole_depth=True)
         assert (proxy is not None) is whole
         if whole:
             assert proxy.nx == strip.PROXY_NX and proxy.ny == scene.ny and proxy.boundary == scene.boundary
-            assert proxy.contact.states == ("slip-",) * strip.PROXY_NX
+            assert proxy.contact.states == ("slip-",) * strip.PROXY_NX and list(near) == [0, 1, 2]
+    states = ["stick"] * 40 + ["slip-"] * 30 + ["stick"] * 30
+    scene = _interface_scene(100, (6, 7), 0.5, states=states)
+    line, = contact_lines(scene, LatticeModel(scene))
+    proxy, near = strip.proxy_of(scene, [line], whole_depth=True)
+    assert proxy.ny == scene.ny and proxy.boundary.bottom == scene.boundary.bottom == "fixed"
+    assert [layer.rows for layer in proxy.layers] == [6, 7] and list(near) == [4, 5, 6, 7]
+    itf, = (i for i in proxy.interfaces if i.kind == "frictional")
+    assert itf.states.count("slip-") == 30
 
 
 def test_interface_proxy_targets_give_certified_modes_and_only_a_lower_bound():

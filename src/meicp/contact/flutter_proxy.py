@@ -9,9 +9,8 @@ import numpy as np
 from .damped import damped_flutter
 from .flutter_dense import dense_flutter
 from .flutter_verdict import PencilFlutter
-from .lines import BASE
 from .problem import pencil
-from .proxy import depth_proxy, proxy_of
+from .proxy import proxy_of
 from .result import growth_frequency
 
 #: the search's targets per scene (below limits.FLUTTER_SEARCH_LARGE retained DOFs)
@@ -59,7 +58,7 @@ def _dense_modes(proxy) -> tuple[PencilFlutter, object]:
 def proxy_targets(scene, lines, count: int = SEARCH_TARGETS, *, with_verdict: bool = False, depth: bool = True):
     """Up to ``count`` targets, at least 0.1|σ| apart: σ of the proxy's fastest
     contact-localised flutter modes (all its modes when none is localised), and for a shallow
-    scene the fastest modes of its whole-depth proxy (:func:`~.proxy.depth_proxy`) moved up
+    scene the fastest modes of its whole-depth proxy (:func:`~.proxy.proxy_of`) moved up
     off their cluster (:func:`off_cluster`) — the fastest of all first, by the proxies'
     growth; [] without a proxy.  ``lines``: the scene's contact lines with their states
     resolved (a pencil's ``lines``).  ``with_verdict``: ``(targets, flutter)``, flutter the
@@ -77,8 +76,7 @@ def proxy_targets(scene, lines, count: int = SEARCH_TARGETS, *, with_verdict: bo
     # (growth of the proxy's mode, target): the strip's modes where they are
     candidates = [(_growth(m), m.sigma) for m in
                   ([m for m in found.modes if near_contact(m.x) >= PROXY_LOCALISED] or found.modes)]
-    base = next((line for line in lines if line.name == BASE), None)
-    whole = None if base is None or not depth else depth_proxy(scene, list(base.states))
+    whole = proxy_of(scene, lines, whole_depth=True)[0] if depth else None
     if whole is not None:
         # a shallow lattice's fastest modes can span its depth (issue 29: three layers of 6
         # rows, the strip's one target at growth 0.0045, the lattice's fastest 0.0154 near the

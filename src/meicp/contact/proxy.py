@@ -54,13 +54,17 @@ def strip_proxy(scene, base_states):
         contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
 
 
+def _shallow(scene) -> bool:
+    """More node rows than the strip's :data:`PROXY_ROWS` and at most :data:`DEPTH_PROXY_ROWS`:
+    a scene whose fastest flutter modes may span its depth, not the rows next to the contact."""
+    return PROXY_ROWS < scene.ny <= DEPTH_PROXY_ROWS
+
+
 def depth_proxy(scene, base_states):
-    """The contact-strip proxy with every row of the lattice: :data:`PROXY_NX` columns from the
-    middle of the base, the whole depth — for a shallow scene (at most
-    :data:`DEPTH_PROXY_ROWS` rows, more than the strip's :data:`PROXY_ROWS`), whose fastest
-    flutter modes may span its depth, not the rows next to the contact.  None otherwise, or
-    where :func:`strip_proxy` has none."""
-    if not PROXY_ROWS < scene.ny <= DEPTH_PROXY_ROWS or strip_proxy(scene, base_states) is None:
+    """The contact-strip proxy with every row of a shallow scene (:func:`_shallow`):
+    :data:`PROXY_NX` columns from the middle of the base, the whole depth, the scene's own
+    boundary.  None for other scenes, or where :func:`strip_proxy` has none."""
+    if not _shallow(scene) or strip_proxy(scene, base_states) is None:
         return None
     nx = min(scene.nx, PROXY_NX)
     start = (len(base_states) - nx) // 2
@@ -79,16 +83,17 @@ def sliding_window(states, width: int) -> int:
     return int(best[np.argmin(np.abs(best - middle))])
 
 
-def interface_proxy(scene, line):
+def interface_proxy(scene, line, side: int = PROXY_ROWS // 2):
     """The interface-strip proxy of a frictional interface ``line`` (states resolved): the
-    :data:`PROXY_ROWS` // 2 rows on each side of it (a cut held fixed) and :data:`PROXY_NX`
-    columns where most of its contacts slip, with their states.  None when the scene has a
-    rigid base contact, an embedded band, or another frictional interface within those rows."""
+    ``side`` rows on each side of it (a cut held fixed; ``side`` ≥ the scene's rows: the whole
+    depth, the scene's own boundary) and :data:`PROXY_NX` columns where most of its contacts
+    slip, with their states.  None when the scene has a rigid base contact, an embedded band,
+    or another frictional interface within those rows."""
     if scene.contact is not None or scene.embedded:
         return None
     index = next(i.index for i in scene.interfaces if i.kind == "frictional" and i.below == line.name)
-    below = _take_rows(reversed(scene.layers[:index + 1]), PROXY_ROWS // 2)[::-1]
-    above = _take_rows(scene.layers[index + 1:], PROXY_ROWS // 2)
+    below = _take_rows(reversed(scene.layers[:index + 1]), side)[::-1]
+    above = _take_rows(scene.layers[index + 1:], side)
     first = index + 1 - len(below)  # the scene's index of the proxy's first layer
     kept = tuple(below + above)
     interfaces = tuple(dataclasses.replace(i, index=i.index - first) for i in scene.interfaces
@@ -107,17 +112,21 @@ def interface_proxy(scene, line):
                                interfaces=interfaces, boundary=boundary, load=None)
 
 
-def proxy_of(scene, lines):
+def proxy_of(scene, lines, *, whole_depth: bool = False):
     """(proxy scene, its rows next to the contact) for the one sliding contact line of a scene,
     or (None, None): the base strip, else the strip around the one sliding frictional
-    interface."""
+    interface.  ``whole_depth``: the same strip with every row of a shallow scene
+    (:func:`_shallow`; (None, None) for others) — its fastest flutter modes may span the depth."""
+    if whole_depth and not _shallow(scene):
+        return None, None
     sliding = [line for line in lines if any(ContactState(s).slip_sign for s in line.states)]
     base = next((line for line in lines if line.name == BASE), None)
     if base is not None:
-        return strip_proxy(scene, list(base.states)), np.arange(PROXY_NEAR_ROWS)
+        proxy = (depth_proxy if whole_depth else strip_proxy)(scene, list(base.states))
+        return proxy, np.arange(PROXY_NEAR_ROWS)
     if len(sliding) != 1:
         return None, None
-    proxy = interface_proxy(scene, sliding[0])
+    proxy = interface_proxy(scene, sliding[0], scene.ny if whole_depth else PROXY_ROWS // 2)
     if proxy is None:
         return None, None
     index = next(i.index for i in proxy.interfaces if i.kind == "frictional")
