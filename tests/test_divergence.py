@@ -122,11 +122,28 @@ def test_the_proxy_estimate_is_skipped_where_it_would_mislead_or_fail():
     assert meicp.analyze(grazing, flutter=False).divergence is True
     free_top = two_layer_scene(60, (2, 2), mu=1.0, states="slip+", top="free")
     with pencil(free_top) as pen:
-        assert proxy.rightmost_real(free_top, pen.lines) is None
+        assert proxy.rightmost_real(free_top, pen.lines) == 0.0  # no real σ above 0: no first search
     scene = _scene(60, (2, 2), "slip-", 3.0)
     with pencil(scene) as pen:
         given = search.search_settings(pen, scene, None, 0.0, 1e-10, {"target": 5.0}, 1.0, 0.0)
         assert search.first_shift(given, scene) == (5.0, "the caller's target")
+
+
+def test_no_first_search_where_the_proxy_has_no_real_sigma_above_0(caplog):
+    """nx = 400, 10 + 10 rows, slip+, shear 0.5, μ = 0.8841: the window's top is above 0 but
+    the contact-strip proxy has no real σ above 0; from the top the short search found nothing
+    (docs/benchmarks-notes.md, "no first search without a proxy mode"), so none is made and
+    the condensed proof decides, with no eigen-solve."""
+    scene = two_layer_scene(400, (10, 10), mu=0.8841, states="slip+", shear=0.5)
+    with pencil(scene) as pen:
+        assert sigma_window.probe_top(pen.A, pen.B).positive
+        assert proxy.rightmost_real(scene, pen.lines) == 0.0
+        settings = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, 1.0, 0.0)
+        assert search.first_shift(settings, scene)[0] is None and search.first_search(settings, scene) is None
+    with caplog.at_level("INFO", logger="meicp"):
+        r = meicp.analyze(scene, flutter=False)
+    assert r.divergence is False and r.proofs[0].test == "condensed-windows" and r.proofs[0].eigen_solves == 0
+    assert any("no first search (the contact-strip proxy has no real σ above 0)" in m for m in caplog.messages)
 
 
 def test_stable_by_the_condensed_windows_where_the_rayleigh_bound_fails():

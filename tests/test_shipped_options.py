@@ -63,6 +63,9 @@ def test_nev_widens_only_the_last_search(monkeypatch, nev, expected):
         return CondensedProof(False, "", "stopped for the test", -1.0, 1, (0.0, 1e-3))
 
     monkeypatch.setattr(search_module, "solve_eicp", recording)
+    # no proxy estimate: the first search from the top (this scene's proxy has no real σ above
+    # 0, which would skip it)
+    monkeypatch.setattr(search_module, "rightmost_real", lambda scene, lines: None)
     scene = two_layer_scene(60, (2, 2), mu=1.2, states="slip-", shear=0.5)
     with pencil(scene) as pen:
         options = {} if nev is None else {"nev": nev}

@@ -141,11 +141,13 @@ POSITIVE = 1e-8
 
 def rightmost_real(scene, lines) -> float | None:
     """The largest real eigenvalue σ > 0 (beyond :data:`POSITIVE`) of the proxy's sliding
-    pencil (A, B) — its fastest divergence-like mode (dense, serial: a few hundred DOFs) — or
-    None (no proxy, a grazing contact in it, a failed eigen-solve, or no real σ above 0).  A
-    damped scene's proxy gives its undamped pencil's.  Where the divergence search starts,
-    never a proof of anything; on several ranks the caller computes it on one
-    (:func:`~meicp.contact.on_root.on_root`): the shift it gives must be the same on all."""
+    pencil (A, B) — its fastest divergence-like mode (dense, serial: a few hundred DOFs); 0.0
+    when it has no real σ above 0 (a free top's rigid motion at rounding level included); None
+    without an estimate (no proxy, a grazing contact in it, a failed eigen-solve).  A damped
+    scene's proxy gives its undamped pencil's.  Where the divergence search starts, or whether
+    a short one is made at all, never a proof of anything; on several ranks the caller
+    computes it on one (:func:`~meicp.contact.on_root.on_root`): what it gives must be the
+    same on all."""
     proxy, _ = proxy_of(scene, lines)
     if proxy is None or any(ContactState.GRAZING in line.states for line in lines):
         return None  # a grazing contact's proxy needs a case per tangential choice: no estimate
@@ -162,7 +164,7 @@ def rightmost_real(scene, lines) -> float | None:
     real = values.real[np.abs(values.imag) <= 1e-8 * np.maximum(1.0, np.abs(values))]
     top = float(real.max(initial=0.0))
     scale = np.abs(A).max() / max(np.abs(B).max(), 1e-300)
-    return top if top > POSITIVE * scale else None
+    return top if top > POSITIVE * scale else 0.0
 
 
 __all__ = ["PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "interface_proxy", "proxy_of", "rightmost_real",

@@ -11,7 +11,8 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
    else from θ; only when θ > 0 beyond rounding: with the top at or below 0 it starts in the cluster of
    slow vibrations and gives up after one restart
    (docs/benchmarks-notes.md, "first search only above 0"), so the proof comes first and the
-   whole search after it.
+   whole search after it; and not when the proxy has no real σ above 0 (it found nothing from
+   the top on every scene measured: "no first search without a proxy mode").
 3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).
 4. **σ-window**, only where that proof stopped at some σ = c: a certified σ_max
    (:mod:`.sigma_window`); ``σ_max ≤ c`` completes the proof, else the search goes on from σ_max.

@@ -174,26 +174,34 @@ def search(settings: SearchSettings, before: Tally, max_iter: int | None, *, fir
     return SearchOutcome(eicp, before.after(eicp), got, settings.target)
 
 
-def first_shift(settings: SearchSettings, scene) -> tuple[float, str]:
+def first_shift(settings: SearchSettings, scene) -> tuple[float | None, str]:
     """``(shift, why)``: where the first search starts — PROXY_SHIFT times the rightmost real
     eigenvalue of the scene's contact-strip proxy (:func:`~meicp.contact.proxy.rightmost_real`,
     computed on rank 0: the shift is collective) when that is below the window's top
-    ``settings.target``, else the top; the caller's own ``target`` when it gave one.
-    Collective."""
+    ``settings.target``, else the top; the caller's own ``target`` when it gave one; None
+    (no first search) when the proxy has no real σ above 0: from the top the short search
+    then found nothing on every scene measured (docs/benchmarks-notes.md,
+    "no first search without a proxy mode").  Collective."""
     if settings.target_given:
         return settings.target, "the caller's target"
     estimate = on_root(settings.comm, lambda: rightmost_real(scene, settings.pen.lines))
+    if estimate == 0.0:
+        return None, "the contact-strip proxy has no real σ above 0"
     if estimate is None or not PROXY_SHIFT * estimate < settings.target:
         return settings.target, "the window's top"
     return PROXY_SHIFT * estimate, f"{PROXY_SHIFT:g}× the contact-strip proxy's rightmost real σ = {estimate:.6g}"
 
 
-def first_search(settings: SearchSettings, scene=None) -> SearchOutcome:
+def first_search(settings: SearchSettings, scene=None) -> SearchOutcome | None:
     """The short search: a mode on the full support, or one support update away, is found at
-    once.  From the shift :func:`first_shift` places (given the scene),
-    else from ``settings.target``; the outcome's ``target`` says where it started."""
+    once.  From the shift :func:`first_shift` places (given the scene; None, no search, where
+    it places none), else from ``settings.target``; the outcome's ``target`` says where it
+    started."""
     if scene is not None:
         shift, why = first_shift(settings, scene)
+        if shift is None:
+            log.info("divergence: no first search (%s)", why)
+            return None
         log.info("divergence: first search from σ = %.6g (%s)", shift, why)
         settings = settings.from_shift(shift)
     return search(settings, Tally(), settings.first_budget, first=True)
