@@ -40,8 +40,8 @@ CHECK = ["nx", "rows", "J", "state", "shear", "mu", "truth", "window", "agree", 
 COST = ["nx", "rows", "dofs", "J", "ranks", "state", "shear", "mu", "divergence", "test", "sigma", "analyze_s",
         "eigensolve_s", "ratio", "load1"]
 FIRST = ["family", "nx", "rows", "contrast", "state", "shear", "mu", "theta_positive", "theta", "first_search",
-         "first_found", "first_sigma", "first_s", "proxy_shift", "proxy_found", "proxy_sigma", "proxy_s", "divergence",
-         "test"]
+         "first_found", "first_sigma", "first_s", "driver_first", "proxy_shift", "proxy_found", "proxy_sigma", "proxy_s",
+         "divergence", "test"]
 COST_FLUTTER = COST + ["flutter", "flutter_s", "growth_lower", "growth_upper", "commit", "flutter_evidence"]
 MUS = np.geomspace(0.05, 6.0, 8)
 
@@ -213,7 +213,10 @@ def first(args):
                 settings = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, top.shift, started)
                 row.update(first_search=True, **_timed_first(settings, "first"))
                 shift, _ = search.first_shift(settings, scene)
-                if shift != settings.target:  # the driver's first search, from the proxy's estimate
+                # the driver's first search, from the proxy's estimate (None: the proxy has no
+                # real σ above 0, and the driver makes no first search)
+                row.update(driver_first=shift is not None)
+                if shift is not None and shift != settings.target:
                     row.update(proxy_shift=f"{shift:.6g}", **_timed_first(settings.from_shift(shift), "proxy"))
         r = meicp.analyze(scene, flutter=False)
         row.update(divergence=r.divergence, test=r.proofs[0].test if r.proofs else "")
