@@ -213,9 +213,9 @@ def first(args):
                 settings = search.search_settings(pen, scene, None, 0.0, 1e-10, {}, top.shift, started)
                 row.update(first_search=True, **_timed_first(settings, "first"))
                 shift, _ = search.first_shift(settings, scene)
-                # the driver's first search, from the proxy's estimate (None: the proxy has no
-                # real σ above 0, and the driver makes no first search)
-                row.update(driver_first=shift is not None)
+                # whether the driver makes a first search: only above 0, and not where the proxy
+                # has no real σ above 0 (shift None); from the proxy's estimate when lower
+                row.update(driver_first=top.positive and shift is not None)
                 if shift is not None and shift != settings.target:
                     row.update(proxy_shift=f"{shift:.6g}", **_timed_first(settings.from_shift(shift), "proxy"))
         r = meicp.analyze(scene, flutter=False)
