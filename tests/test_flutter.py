@@ -641,7 +641,8 @@ def test_a_shallow_lattice_is_searched_from_its_whole_depth_too():
         got = fl.pencil_flutter(pen, scene, dense_max=0)
     fastest = max(growth_frequency(m.sigma)[0] for m in ref.modes)
     found = [growth_frequency(m.sigma)[0] for m in got.modes]
-    assert ref.complete and got.flutter is True
+    assert ref.complete and got.flutter is True and "and its whole depth (18 rows" in got.evidence
+    assert "whole depth" not in strip_only.evidence  # targets given: the caller's
     assert max(growth_frequency(m.sigma)[0] for m in strip_only.modes) < 0.5 * fastest
     assert max(found) == pytest.approx(fastest, rel=1e-8)
     assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)

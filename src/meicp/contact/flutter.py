@@ -47,7 +47,7 @@ from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, Flut
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
-from .proxy import PROXY_NX, PROXY_ROWS
+from .proxy import PROXY_NX, PROXY_ROWS, proxy_of
 from .result import FlutterMode
 
 log = logging.getLogger("meicp")
@@ -244,6 +244,9 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
         targets = proxy_targets(scene, pen.lines, count)
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
+        if proxy_of(scene, pen.lines, whole_depth=True)[0] is not None:
+            why += (f" and its whole depth ({scene.ny} rows, dense QZ; those targets moved up off their "
+                    "cluster)")
         interface = not any(line.name == BASE for line in pen.lines)
         if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM and interface:
             search.setdefault("nev", 1)
