@@ -115,8 +115,9 @@ def test_the_first_search_starts_at_the_top_when_the_proxy_estimate_is_not_below
 
 def test_the_proxy_estimate_is_skipped_where_it_would_mislead_or_fail():
     """No estimate from a proxy with a grazing contact (its pencil needs a tangential case: it
-    used to raise), none from a rigid motion at rounding level (a free top: σ ≈ 1e-14 would
-    start the search among the slow vibrations), and a caller's own target is kept."""
+    used to raise); a rigid motion at rounding level (a free top: σ ≈ 1e-14 would start the
+    search among the slow vibrations) counts as no real σ above 0 (0.0: no first search); a
+    caller's own target is kept."""
     grazing = two_layer_scene(60, (2, 2), mu=3.0, states=["slip-"] * 29 + ["grazing"] + ["slip-"] * 30)
     assert proxy.rightmost_real(grazing, contact_lines(grazing, LatticeModel(grazing))) is None
     assert meicp.analyze(grazing, flutter=False).divergence is True

@@ -435,7 +435,8 @@ def test_large_pencils_start_above_the_cluster(monkeypatch):
         ref = fl.pencil_flutter(pen, scene)
         tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
     (targets, kw), = seen
-    assert targets == [fl.off_cluster(tau, 0)]
+    # the search's proxy solve runs on rank 0 with bounded BLAS threads: the same σ to rounding
+    assert len(targets) == 1 and abs(targets[0] - fl.off_cluster(tau, 0)) <= 1e-10 * abs(tau)
     assert kw["ncv"] == fl.OFF_CLUSTER_NCV and kw["low_rank"] == fl.LOW_RANK_TOL
     assert "moved up off its cluster before the first solve" in got.evidence
     assert got.flutter is True and got.modes
@@ -717,7 +718,8 @@ def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monke
         ref = fl.pencil_flutter(pen, scene)
         tau = complex(fl.proxy_targets(scene, pen.lines, 1)[0])
     (targets, kw), = seen
-    assert targets == [tau] and kw["nev"] == 1 and kw["ncv"] == fl.INTERFACE_NCV
+    assert len(targets) == 1 and abs(targets[0] - tau) <= 1e-10 * abs(tau)  # rank 0's solve: σ to rounding
+    assert kw["nev"] == 1 and kw["ncv"] == fl.INTERFACE_NCV
     assert f"searched at its σ for 1 eigenpair(s) with a basis of {fl.INTERFACE_NCV}" in got.evidence
     assert got.flutter is True and got.modes
     assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)

@@ -32,7 +32,8 @@ from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
                              memory_refusal, real_ritz_note, search_conclusion)
 from .lines import BASE
-from .proxy import PROXY_NX, PROXY_ROWS
+from .on_root import on_root
+from .proxy import PROXY_NX, PROXY_ROWS, proxy_of
 
 log = logging.getLogger("meicp")
 
@@ -73,11 +74,14 @@ def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
     flutter modes (λ = √σ) — a base proxy's moved up off its cluster first from
     ``limits.FLUTTER_OFF_CLUSTER_FROM`` DOFs, as the undamped search does — none when the
     damped proxy is proved free of flutter, else the λ-line."""
+    depth = n < limits.FLUTTER_OFF_CLUSTER_FROM  # larger: the targets are moved up below, once
     sigmas, proxy_flutter = proxy_targets(scene, lines, 1 if n >= limits.FLUTTER_SEARCH_LARGE else 3,
-                                          with_verdict=True)
+                                          with_verdict=True, depth=depth)
     if sigmas:
         targets = [complex(np.sqrt(complex(s))) for s in sigmas]
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy (dense companion QZ)"
+        if depth and proxy_of(scene, lines, whole_depth=True)[0] is not None:
+            why += f" and its whole depth ({scene.ny} rows; those targets moved up off their cluster)"
         if n >= limits.FLUTTER_OFF_CLUSTER_FROM and any(line.name == BASE for line in lines):
             moved = [moved_off(t, 0) for t in targets]
             why += (", each moved up off its cluster before the first solve: "
@@ -106,7 +110,7 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
         return refused
     why = ""
     if targets is None:
-        targets, why = damped_targets(scene, pen.lines, n)
+        targets, why = on_root(comm, lambda: damped_targets(scene, pen.lines, n))  # one answer on every rank
         if not targets:
             return PencilFlutter(None, [], f"damped: no target searched{why}" + search_conclusion([]),
                                  counts={"targets": 0},

@@ -63,7 +63,7 @@ OFF_CLUSTER_NCV = 16
 #: (docs/benchmarks-notes.md, "INTERFACE_NCV")
 INTERFACE_NCV = 24
 #: SLEPc restarts at a target that may still be moved off its cluster, and at the last one
-#: (SLEPc's own default).  With a narrow basis at the next target a cap of 40 before a move did
+#: (SLEPc's own default before either was named).  With a narrow basis at the next target a cap of 40 before a move did
 #: not pay; with RETRY_NCV there, 20 restarts bound what a target that converges nothing costs
 #: (docs/benchmarks-notes.md, "SEARCH_RESTARTS", "RETRY_NCV")
 SEARCH_RESTARTS = 20
@@ -128,7 +128,7 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
             tau = tau.conjugate() if tau.imag < 0 else tau
             for attempt in range(off_cluster_tries + 1):
                 last = attempt == off_cluster_tries
-                basis = ncv if attempt == 0 or not ncv else max(ncv, RETRY_NCV)
+                basis = ncv if attempt == 0 else max(ncv or 0, RETRY_NCV)
                 pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=basis, tol=tol, low_rank=low_rank,
                                                   max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
                                                   options=options, gate=residual_tol, strict_tol=strict_tol)
@@ -160,7 +160,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                      f"{it} restarts)" for t, r, k, p, it in disks)
     off = "".join(f"; no pair near τ = {a.real:.4g}{a.imag:+.4g}i passed the residual gate (pseudo-pairs or none "
                   f"converged, as shift-and-invert gives inside a cluster of ill-conditioned eigenvalues), so the "
-                  f"target moved off it to {b.real:.4g}{b.imag:+.4g}i, searched with a basis of at least {RETRY_NCV}"
+                  f"target moved off it to {b.real:.4g}{b.imag:+.4g}i, searched with a basis of at least {RETRY_NCV} "
+                  "(unless the options set eps_ncv)"
                   for a, b in moved)
     evidence = (f"complex shift-and-invert at {len(disks)} target(s){why_targets}{off}: the eigenvalues SLEPc "
                     f"converged in {text}"
@@ -242,9 +243,12 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     why = ""
     if targets is None:
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
-        targets = proxy_targets(scene, pen.lines, count)
+        # the whole-depth proxy's targets are moved up off their cluster already: not where
+        # every target is moved up below (at that size a shallow scene has not been measured)
+        depth = n < limits.FLUTTER_OFF_CLUSTER_FROM
+        targets = on_root(comm, lambda: proxy_targets(scene, pen.lines, count, depth=depth))  # one answer on all
         why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
-        if proxy_of(scene, pen.lines, whole_depth=True)[0] is not None:
+        if depth and proxy_of(scene, pen.lines, whole_depth=True)[0] is not None:
             why += (f" and its whole depth ({scene.ny} rows, dense QZ; those targets moved up off their "
                     "cluster)")
         interface = not any(line.name == BASE for line in pen.lines)

@@ -1,6 +1,7 @@
 """The flutter searches' targets from a scene's contact-strip proxy (:mod:`.proxy`; docs/flutter.md
 §4): its dense flutter modes localised at the contact (slip waves along it, whose σ hardly
-depends on the lattice's size), and where a search goes when a target fails."""
+depends on the lattice's size), those of its whole depth on a shallow scene, and where a
+search goes when a target fails."""
 
 from __future__ import annotations
 

@@ -2,6 +2,8 @@
 sliding contact line — the base strip, or the strip around one frictional interface — whose
 dense spectrum tells the large-scale searches where to start: the flutter searches' targets
 (:mod:`.flutter_proxy`) and the divergence search's first shift (:func:`rightmost_real`).
+A shallow scene also has the same strip with every row (:func:`proxy_of` ``whole_depth``):
+its fastest flutter modes may span the depth.
 The modes that matter there are localised at the contact (slip waves, a sliding layer's
 buckling), so their σ hardly depends on the lattice's size."""
 
@@ -142,8 +144,9 @@ POSITIVE = 1e-8
 def rightmost_real(scene, lines) -> float | None:
     """The largest real eigenvalue σ > 0 (beyond :data:`POSITIVE`) of the proxy's sliding
     pencil (A, B) — its fastest divergence-like mode (dense, serial: a few hundred DOFs); 0.0
-    when it has no real σ above 0 (a free top's rigid motion at rounding level included); None
-    without an estimate (no proxy, a grazing contact in it, a failed eigen-solve).  A damped
+    when it has no real σ above 0 (a free top's rigid motion at rounding level included) and
+    every contact in it slides, as on every scene where that was measured; None without an
+    estimate (no proxy, a grazing, sticking or separated contact in it, a failed eigen-solve).  A damped
     scene's proxy gives its undamped pencil's.  Where the divergence search starts, or whether
     a short one is made at all, never a proof of anything; on several ranks the caller
     computes it on one (:func:`~meicp.contact.on_root.on_root`): what it gives must be the
@@ -161,11 +164,26 @@ def rightmost_real(scene, lines) -> float | None:
     except (ProblemError, np.linalg.LinAlgError, ValueError):
         return None
     values = values[np.isfinite(values)]
+    if not values.size or not np.all(np.isfinite(A)):
+        return None
     real = values.real[np.abs(values.imag) <= 1e-8 * np.maximum(1.0, np.abs(values))]
     top = float(real.max(initial=0.0))
     scale = np.abs(A).max() / max(np.abs(B).max(), 1e-300)
-    return top if top > POSITIVE * scale else 0.0
+    if top > POSITIVE * scale:
+        return top
+    return 0.0 if _all_sliding(proxy) else None
 
 
-__all__ = ["PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "interface_proxy", "proxy_of", "rightmost_real",
+def _all_sliding(proxy) -> bool:
+    """Every contact of the proxy's one contact line slides (its base, or its frictional
+    interface)."""
+    if proxy.contact is not None:
+        states = proxy.contact.states
+    else:
+        states = next(i.states for i in proxy.interfaces if i.kind == "frictional")
+    return isinstance(states, tuple) and all(ContactState(s).slip_sign != 0 for s in states)
+
+
+__all__ = ["DEPTH_PROXY_ROWS", "PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "depth_proxy", "interface_proxy",
+           "proxy_of", "rightmost_real",
            "sliding_window", "strip_proxy"]

@@ -385,7 +385,7 @@ def converged_pairs(eps, template, tau: complex, *, inverted: bool, residual, ga
     """The converged pairs of a shift-and-invert EPS on the real form of a complex operator
     whose eigenvalues are ``1/(value − τ)`` (``inverted``) or ``value − τ`` (the real 2n
     form's pencil), and ``info`` with {``nconv``, ``iterations``, ``radius``: the largest
-    |value − τ| converged, ``real_ritz``: the real Ritz values skipped}.  Pairs: (value with
+    |value − τ| among the pairs kept, ``real_ritz``: the real Ritz values skipped}.  Pairs: (value with
     Im ≥ 0, x gathered on every rank, its ``residual``); ``head``: x is the first ``head``
     local entries of each complex vector (the companion form's x of [x; λx]), None: all.
     ``template``: a Mat whose right vectors are the EPS's.

@@ -192,13 +192,15 @@ def first_shift(settings: SearchSettings, scene) -> tuple[float | None, str]:
     return PROXY_SHIFT * estimate, f"{PROXY_SHIFT:g}× the contact-strip proxy's rightmost real σ = {estimate:.6g}"
 
 
-def first_search(settings: SearchSettings, scene=None) -> SearchOutcome | None:
+def first_search(settings: SearchSettings, scene=None, *, skip: bool = True) -> SearchOutcome | None:
     """The short search: a mode on the full support, or one support update away, is found at
-    once.  From the shift :func:`first_shift` places (given the scene; None, no search, where
-    it places none), else from ``settings.target``; the outcome's ``target`` says where it
-    started."""
+    once.  From the shift :func:`first_shift` places (given the scene; where it places none,
+    None — no search — or, with ``skip`` False, from the top), else from ``settings.target``;
+    the outcome's ``target`` says where it started."""
     if scene is not None:
         shift, why = first_shift(settings, scene)
+        if shift is None and not skip:
+            shift, why = settings.target, f"the window's top: {why}, searched all the same"
         if shift is None:
             log.info("divergence: no first search (%s)", why)
             return None
