@@ -28,12 +28,12 @@ from ..petsc.mat import distributed
 from .flutter_dense import _fastest_first, _normalise
 from .flutter_growth import quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
-                            off_cluster, proxy_targets)
+                            depth_note, depth_used, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
                              memory_refusal, real_ritz_note, search_conclusion)
 from .lines import BASE
 from .on_root import on_root
-from .proxy import PROXY_NX, PROXY_ROWS, proxy_of
+from .proxy import PROXY_NX, PROXY_ROWS
 
 log = logging.getLogger("meicp")
 
@@ -74,14 +74,12 @@ def damped_targets(scene, lines, n: int) -> tuple[list[complex], str]:
     flutter modes (λ = √σ) — a base proxy's moved up off its cluster first from
     ``limits.FLUTTER_OFF_CLUSTER_FROM`` DOFs, as the undamped search does — none when the
     damped proxy is proved free of flutter, else the λ-line."""
-    depth = n < limits.FLUTTER_OFF_CLUSTER_FROM  # larger: the targets are moved up below, once
     sigmas, proxy_flutter = proxy_targets(scene, lines, 1 if n >= limits.FLUTTER_SEARCH_LARGE else 3,
-                                          with_verdict=True, depth=depth)
+                                          with_verdict=True, depth=depth_used(n))
     if sigmas:
         targets = [complex(np.sqrt(complex(s))) for s in sigmas]
-        why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy (dense companion QZ)"
-        if depth and proxy_of(scene, lines, whole_depth=True)[0] is not None:
-            why += f" and its whole depth ({scene.ny} rows; those targets moved up off their cluster)"
+        why = (f" from a {PROXY_NX}-column, {PROXY_ROWS}-row damped contact-strip proxy"
+               f"{depth_note(scene, lines, n)} (dense companion QZ)")
         if n >= limits.FLUTTER_OFF_CLUSTER_FROM and any(line.name == BASE for line in lines):
             moved = [moved_off(t, 0) for t in targets]
             why += (", each moved up off its cluster before the first solve: "

@@ -41,13 +41,13 @@ from .damped_search import search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
-                            SEARCH_TARGETS, off_cluster, proxy_targets)
+                            SEARCH_TARGETS, depth_note, depth_used, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, FlutterVerdict, PencilFlutter,
                              RejectedPair, memory_refusal, real_ritz_note, search_conclusion)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
-from .proxy import PROXY_NX, PROXY_ROWS, proxy_of
+from .proxy import PROXY_NX, PROXY_ROWS
 from .result import FlutterMode
 
 log = logging.getLogger("meicp")
@@ -63,9 +63,9 @@ OFF_CLUSTER_NCV = 16
 #: (docs/benchmarks-notes.md, "INTERFACE_NCV")
 INTERFACE_NCV = 24
 #: SLEPc restarts at a target that may still be moved off its cluster, and at the last one
-#: (SLEPc's own default before either was named).  With a narrow basis at the next target a cap of 40 before a move did
-#: not pay; with RETRY_NCV there, 20 restarts bound what a target that converges nothing costs
-#: (docs/benchmarks-notes.md, "SEARCH_RESTARTS", "RETRY_NCV")
+#: (SLEPc's own default before either was named).  With a narrow basis at the next target a
+#: cap of 40 before a move did not pay; with RETRY_NCV there, 20 restarts bound what a target
+#: that converges nothing costs (docs/benchmarks-notes.md, "SEARCH_RESTARTS", "RETRY_NCV")
 SEARCH_RESTARTS = 20
 LAST_RESTARTS = 500
 #: a target moved off its cluster is searched with a Krylov basis of at least RETRY_NCV: the
@@ -243,14 +243,10 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
     why = ""
     if targets is None:
         count = 1 if n >= limits.FLUTTER_SEARCH_LARGE else SEARCH_TARGETS
-        # the whole-depth proxy's targets are moved up off their cluster already: not where
-        # every target is moved up below (at that size a shallow scene has not been measured)
-        depth = n < limits.FLUTTER_OFF_CLUSTER_FROM
-        targets = on_root(comm, lambda: proxy_targets(scene, pen.lines, count, depth=depth))  # one answer on all
-        why = f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy (dense QZ)"
-        if depth and proxy_of(scene, pen.lines, whole_depth=True)[0] is not None:
-            why += (f" and its whole depth ({scene.ny} rows, dense QZ; those targets moved up off their "
-                    "cluster)")
+        # one answer on every rank: the shift of the collective factor
+        targets = on_root(comm, lambda: proxy_targets(scene, pen.lines, count, depth=depth_used(n)))
+        why = (f" from a {PROXY_NX}-column, {PROXY_ROWS}-row contact-strip proxy"
+               f"{depth_note(scene, pen.lines, n)} (dense QZ)")
         interface = not any(line.name == BASE for line in pen.lines)
         if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM and interface:
             search.setdefault("nev", 1)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core import limits
 from .damped import damped_flutter
 from .flutter_dense import dense_flutter
 from .flutter_verdict import PencilFlutter
@@ -39,6 +40,20 @@ def off_cluster(tau: complex, attempt: int) -> complex:
     real axis, by OFF_CLUSTER·max(Im τ, 0.05|τ|)·2^attempt (the fastest flutter modes of a
     cluster are those of largest Im σ, on its top edge)."""
     return tau + 1j * OFF_CLUSTER * max(tau.imag, 0.05 * abs(tau)) * 2 ** attempt
+
+
+def depth_used(n: int) -> bool:
+    """Whether the search of a pencil of ``n`` retained DOFs takes the whole-depth proxy's
+    targets (already moved up off their cluster): below ``limits.FLUTTER_OFF_CLUSTER_FROM``,
+    from where every target is moved up anyway (a shallow scene that large was not measured)."""
+    return n < limits.FLUTTER_OFF_CLUSTER_FROM
+
+
+def depth_note(scene, lines, n: int) -> str:
+    """The evidence's words on the whole-depth proxy's targets, "" when there are none."""
+    if not depth_used(n) or proxy_of(scene, lines, whole_depth=True)[0] is None:
+        return ""
+    return f" and its whole depth ({scene.ny} rows; those targets moved up off their cluster)"
 
 
 def _growth(mode) -> float:

@@ -24,7 +24,7 @@ PROXY_NX = 32
 PROXY_ROWS = 8
 PROXY_NEAR_ROWS = 3
 #: a scene of at most this many node rows also gets a proxy of its whole depth
-#: (:func:`depth_proxy`; 32 × 24 nodes: about 1,500 DOFs, a few seconds of dense QR)
+#: (:func:`proxy_of` ``whole_depth``; 32 × 24 nodes: about 1,500 DOFs, a few seconds of dense QR)
 DEPTH_PROXY_ROWS = 24
 
 
@@ -39,14 +39,15 @@ def _take_rows(layers, budget: int) -> list:
     return kept
 
 
-def strip_proxy(scene, base_states):
-    """The contact-strip proxy: the bottom :data:`PROXY_ROWS` rows (the cut held fixed) and
-    :data:`PROXY_NX` columns from the middle of the base, with the base's resolved states.
-    None when the scene has no base contact, a frictional interface or an embedded band."""
+def strip_proxy(scene, base_states, rows: int = PROXY_ROWS):
+    """The contact-strip proxy: the bottom ``rows`` rows (the cut held fixed; ``rows`` ≥ the
+    scene's: the whole depth, the scene's own boundary) and :data:`PROXY_NX` columns from the
+    middle of the base, with the base's resolved states.  None when the scene has no base
+    contact, a frictional interface or an embedded band."""
     if scene.contact is None or scene.embedded or any(i.kind == "frictional" for i in scene.interfaces):
         return None
     nx = min(scene.nx, PROXY_NX)
-    kept = _take_rows(scene.layers, PROXY_ROWS)
+    kept = _take_rows(scene.layers, rows)
     cut = sum(layer.rows for layer in kept) < scene.ny
     start = (len(base_states) - nx) // 2
     return dataclasses.replace(
@@ -60,19 +61,6 @@ def _shallow(scene) -> bool:
     """More node rows than the strip's :data:`PROXY_ROWS` and at most :data:`DEPTH_PROXY_ROWS`:
     a scene whose fastest flutter modes may span its depth, not the rows next to the contact."""
     return PROXY_ROWS < scene.ny <= DEPTH_PROXY_ROWS
-
-
-def depth_proxy(scene, base_states):
-    """The contact-strip proxy with every row of a shallow scene (:func:`_shallow`):
-    :data:`PROXY_NX` columns from the middle of the base, the whole depth, the scene's own
-    boundary.  None for other scenes, or where :func:`strip_proxy` has none."""
-    if not _shallow(scene) or strip_proxy(scene, base_states) is None:
-        return None
-    nx = min(scene.nx, PROXY_NX)
-    start = (len(base_states) - nx) // 2
-    return dataclasses.replace(
-        scene, lattice=dataclasses.replace(scene.lattice, nx=nx),
-        contact=dataclasses.replace(scene.contact, states=tuple(state_names(base_states[start:start + nx]))))
 
 
 def sliding_window(states, width: int) -> int:
@@ -124,8 +112,8 @@ def proxy_of(scene, lines, *, whole_depth: bool = False):
     sliding = [line for line in lines if any(ContactState(s).slip_sign for s in line.states)]
     base = next((line for line in lines if line.name == BASE), None)
     if base is not None:
-        proxy = (depth_proxy if whole_depth else strip_proxy)(scene, list(base.states))
-        return proxy, np.arange(PROXY_NEAR_ROWS)
+        rows = scene.ny if whole_depth else PROXY_ROWS
+        return strip_proxy(scene, list(base.states), rows), np.arange(PROXY_NEAR_ROWS)
     if len(sliding) != 1:
         return None, None
     proxy = interface_proxy(scene, sliding[0], scene.ny if whole_depth else PROXY_ROWS // 2)
@@ -184,6 +172,5 @@ def _all_sliding(proxy) -> bool:
     return isinstance(states, tuple) and all(ContactState(s).slip_sign != 0 for s in states)
 
 
-__all__ = ["DEPTH_PROXY_ROWS", "PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "depth_proxy", "interface_proxy",
-           "proxy_of", "rightmost_real",
-           "sliding_window", "strip_proxy"]
+__all__ = ["DEPTH_PROXY_ROWS", "PROXY_NEAR_ROWS", "PROXY_NX", "PROXY_ROWS", "interface_proxy", "proxy_of",
+           "rightmost_real", "sliding_window", "strip_proxy"]
