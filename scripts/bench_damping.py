@@ -20,6 +20,10 @@ certified damped flutter mode, docs/critical-friction.md) and the divergence ons
 certified bracket — drawn on the chart as vertical lines (solid: an exact onset, its bracket
 narrower than 10⁻⁶·μ; a shaded band: a bracket that is not).
 
+``scale --relaxation τ``: the same with η = τ·k in every layer — damping proportional to
+stiffness, where the damped divergence is the undamped MEiCP's (docs/damping.md,
+"Proportional damping").
+
 ``scale``: the damped verdict at 10⁶ DOFs on ``--ranks`` ranks (issue 31, deliverable 5): each
 shipped 10⁶-DOF scene file of ``--scenes`` (``stem@μ``: at friction μ) with viscosity
 ``--eta`` in every layer and its ``[solver]`` table left out (written to a temporary directory), ``meicp solve --json`` on it and, side by side under the same
@@ -38,7 +42,9 @@ import numpy as np
 
 from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
 import meicp
+from meicp.contact.damped_proportional import proportional_damping
 from meicp.examples import two_layer_scene
+from meicp.lattice.model import LatticeModel
 from meicp.io.scene import scene_from_dict
 
 SCALE_FIELDS = ["scene", "eta", "friction", "dofs", "retained", "contacts", "ranks", "verdict", "divergence", "divergence_test", "flutter",
@@ -176,7 +182,15 @@ def scale(args) -> None:
             stem, _, mu = stem.partition("@")  # "scene@μ": every contact line at friction μ
             data = meicp.load_scene(ROOT / "data" / "scenes" / f"{stem}.toml").to_dict()
             data.pop("solver", None)
-            scene = with_viscosity(scene_from_dict(data), (args.eta,) * 99)
+            if args.relaxation is None:
+                scene, eta = with_viscosity(scene_from_dict(data), (args.eta,) * 99), args.eta
+            else:  # η = τ·k in every layer: damping proportional to stiffness (docs/damping.md)
+                for layer in data["layers"]:
+                    layer["viscosity"] = args.relaxation * layer["stiffness"]
+                scene, eta = scene_from_dict(data), f"{args.relaxation:g}·k"
+                if proportional_damping(LatticeModel(scene)) is None:
+                    raise SystemExit(f"{stem}: η = {args.relaxation:g}·k per layer is not proportional damping "
+                                     "(an interface or band with its own stiffness)")
             if mu:
                 scene = scene.with_friction(float(mu))
             damped = Path(tmp) / f"{stem}_damped.toml"
@@ -186,7 +200,7 @@ def scale(args) -> None:
             timings = doc.get("timings", {})
             growth = doc.get("flutter_growth") or {}
             seconds = eig.get("seconds")
-            row = {"scene": f"{stem}.toml", "eta": args.eta, "friction": mu, "dofs": 2 * scene.nx * scene.ny,
+            row = {"scene": f"{stem}.toml", "eta": eta, "friction": mu, "dofs": 2 * scene.nx * scene.ny,
                    "retained": doc.get("sizes", {}).get("retained", ""),
                    "contacts": doc.get("sizes", {}).get("complementarity", ""), "ranks": args.ranks,
                    "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
@@ -213,7 +227,7 @@ def scale_chart(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    latest = {(r["scene"], r["friction"]): r for r in read_rows(csv_path("damping_scale"))}
+    latest = {(r["scene"], r["friction"], r["eta"]): r for r in read_rows(csv_path("damping_scale"))}
     rows = list(latest.values())
     fig, ax = plt.subplots(figsize=(10, 1.6 + 0.8 * len(rows)))
     for k, r in enumerate(rows):
@@ -253,6 +267,8 @@ def main() -> None:
     c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact"],
                    help="shipped scene file stems, each optionally @μ (every contact line at friction μ)")
     c.add_argument("--eta", type=float, default=0.02, help="viscosity of every layer")
+    c.add_argument("--relaxation", type=float, help="viscosity = this × stiffness in every layer (proportional "
+                                                    "damping) instead of --eta")
     c.add_argument("--ranks", type=int, default=2)
     c.add_argument("--lock", help="flock this file around both commands")
     c.add_argument("--timeout", type=float, default=1800.0, help="seconds per command")

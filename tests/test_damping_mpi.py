@@ -105,3 +105,25 @@ def test_followed_damped_divergence_modes_are_the_same_on_one_and_two_ranks(comm
     assert two.proofs[0].test == one.proofs[0].test == "quadratic-followed"
     assert two.modes[0].sigma == pytest.approx(one.modes[0].sigma, rel=1e-10)
     assert comm.allgather(two.modes[0].sigma) == pytest.approx([two.modes[0].sigma] * comm.size, rel=0)
+
+
+@pytest.mark.parametrize("viscosity, mass, divergence", [((0.02, 0.1), 0.01, True), ((0.05, 0.25), None, False)],
+                         ids=["a mode", "stable"])
+def test_the_proportional_damped_verdict_is_the_same_on_one_and_two_ranks(comm, viscosity, mass, divergence):
+    """Past the enumeration (720 DOFs, 60 sliding contacts) damping proportional to stiffness
+    decides the damped divergence by the undamped verdict of the distributed pencil, its mode
+    certified on the distributed quadratic pencil: the same on 2 ranks as on one."""
+    from mpi4py import MPI
+
+    from meicp.contact.damped_proportional import TEST
+    from meicp.examples import two_layer_scene
+
+    base = (two_layer_scene(60, (3, 3), mu=3.0, states="slip+", shear=0.2) if divergence
+            else two_layer_scene(40, (3, 3), mu=2.0, states="slip-", shear=-0.3))
+    scene = damped(base, eta=viscosity, mass=mass)
+    two = meicp.analyze(scene, comm=comm, flutter=False)
+    one = meicp.analyze(scene, comm=MPI.COMM_SELF, flutter=False)
+    assert two.divergence is divergence and one.divergence is divergence
+    assert two.proofs[0].test == one.proofs[0].test == TEST
+    assert [m.sigma for m in two.modes] == pytest.approx([m.sigma for m in one.modes], rel=1e-10)
+    assert comm.allgather(two.divergence) == [divergence] * comm.size

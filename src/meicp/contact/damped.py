@@ -17,7 +17,9 @@ With the lattice's damping C (Kelvin–Voigt dashpots per bond, plus ``α·M``),
   Re λ < −r decays and one within r of the real axis whose disk meets no other's is real;
   anything else is borderline (undecided).
 
-The divergence is enumerated where the enumeration's limits allow; past them the damped
+The divergence is enumerated where the enumeration's limits allow; past them damping
+proportional to stiffness and mass (``C = cK + αM``) makes it the undamped MEiCP of the same
+pencil, decided by the undamped verdict (:mod:`.damped_proportional`); any other damping: the damped
 Rayleigh bound (:mod:`.damped_rayleigh`, one LDLᵀ inertia) may prove that no λ ≥ 0 exists,
 the undamped modes followed to the damped problem (:mod:`.damped_modes`) may find certified
 ones, and otherwise it is *undecided*, so that the damped flutter search at scale
@@ -47,6 +49,7 @@ from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_growth import FlutterGrowth
 from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, RejectedPair
 from .damped_modes import followed_modes
+from .damped_proportional import proportional_damping, proportional_divergence
 from .damped_rayleigh import damped_rayleigh_bound
 from .on_root import on_root
 
@@ -122,6 +125,9 @@ def damped_divergence(pen, scene, comm, method, lam_min: float, tol: float, opti
     if method == "enumerate":
         check_enumeration_size(n_j, r, options)
     elif not enumeration_is_small(r, n_j):
+        proportional = proportional_damping(pen.model)
+        if proportional is not None:  # exactly the undamped MEiCP (:mod:`.damped_proportional`)
+            return proportional_divergence(pen, scene, comm, proportional, lam_min, tol, options)
         # past the enumeration: the damped Rayleigh bound may prove stability; else undecided,
         # not an error — the damped flutter search may still prove the lattice unstable
         proved, statement = damped_rayleigh_bound(pen)

@@ -1,0 +1,153 @@
+"""Damping proportional to stiffness and mass (Rayleigh damping, ``C = cK + αM``): the damped
+divergence problem *is* the undamped MEiCP (docs/damping.md, "Proportional damping").
+
+When every bond's viscosity is the same multiple c of its stiffness (one relaxation time η/k
+in every layer, band and bonded interface) and ``[damping] mass = α``, then ``C = cK + αM``
+entry by entry, so for any contact maps ``D = P̃CQ̃ = −cA + αB`` and
+
+    λ²B + λD − A = (1 + cλ)·(σ(λ)B − A),      σ(λ) = (λ² + αλ)/(1 + cλ).
+
+For λ ≥ 0 the factor 1 + cλ is positive (y and w = y/(1 + cλ) have the same signs, the same
+zeros) and σ(λ) increases from σ(0) = 0 to ∞, so (λ, x) solves the quadratic MEiCP with
+λ ≥ 0 exactly when (σ(λ), x) solves the undamped MEiCP with σ ≥ 0, on the same support.
+The undamped verdict of the same pencil (A and B alone, every path at every size:
+:func:`~meicp.contact.divergence.driver.divergence_of`) therefore decides the damped one —
+its proofs prove, its modes map to damped modes λ = λ(σ), the root ≥ 0 of
+``λ² + (α − cσ)λ − σ = 0``, each certified again on the quadratic MEiCP itself, row by row
+(:func:`meicp.petsc.damped_refine.quadratic_certificate`).  The same identity puts every
+eigenvalue of the quadratic sliding pencil on a root of that scalar equation at an eigenvalue
+σ of (A, B) (``det Q(λ) = (1 + cλ)ⁿ det(σ(λ)B − A)``).
+
+Proportional here means ``|η − c·k| ≤ PROPORTIONAL_ROUNDING·η`` on every pair of materials a
+bond joins: the input's own rounding (0.1 / 5 and 0.02 differ in the last bit), far inside the
+proofs' margins (``tol`` 1e-10 of the matrices' scale).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..core.comm import mpi_comm
+from ..core.matrix import max_abs_entry
+from ..eicp.problem import lam_floor
+from ..petsc.damped_refine import quadratic_certificate
+from ..petsc.flutter_quadratic import QuadraticPencilOps
+from ..petsc.mat import distributed
+from .damped_modes import CERTIFICATE_TOL
+from .divergence.driver import divergence_of
+from .divergence.modes import mode_of
+from .divergence.verdict import DivergenceProof, DivergenceVerdict
+
+log = logging.getLogger("meicp")
+
+#: how far η may be from c·k, in units of η's rounding, and still count as proportional
+PROPORTIONAL_ROUNDING = 8 * np.finfo(float).eps
+#: the proof test of a damped verdict decided by the undamped one
+TEST = "proportional-damping"
+
+
+@dataclass(frozen=True)
+class ProportionalDamping:
+    """``C = stiffness·K + mass·M`` (c ≥ 0 and α ≥ 0, not both 0)."""
+
+    stiffness: float
+    mass: float
+
+    def sigma_of(self, lam):
+        """σ(λ) = (λ² + αλ)/(1 + cλ): the undamped σ whose pencil the damped one is at λ."""
+        return (lam * lam + self.mass * lam) / (1 + self.stiffness * lam)
+
+    def lam_of(self, sigma: float) -> float:
+        """The root λ ≥ 0 of ``λ² + (α − cσ)λ − σ = 0`` for σ ≥ 0 (σ a few ulps below 0, an
+        exact σ = 0 computed in rounding, gives λ within rounding of 0): the inverse of
+        :meth:`sigma_of` on [0, ∞)."""
+        p = self.mass - self.stiffness * sigma
+        disc = p * p + 4 * sigma
+        root = math.sqrt(max(disc, 0.0))
+        # the form without cancellation: −p + root when p ≤ 0, 2σ/(p + root) when p > 0
+        return 0.5 * (root - p) if p <= 0 else 2 * sigma / (p + root)
+
+    def describe(self) -> str:
+        parts = ([f"{self.stiffness:g}·K"] if self.stiffness else []) + ([f"{self.mass:g}·M"] if self.mass else [])
+        return "C = " + " + ".join(parts)
+
+
+def proportional_damping(model) -> ProportionalDamping | None:
+    """The proportional damping of a :class:`~meicp.lattice.model.LatticeModel`, or None when
+    it has none or its damping is not proportional: every pair of materials a bond joins has
+    ``η = c·k`` with one c (within :data:`PROPORTIONAL_ROUNDING`)."""
+    if not model.damped:
+        return None
+    nm = len(model.materials)
+    codes = (np.arange(nm)[:, None] * nm + np.arange(nm)[None, :] + 1).astype(float)
+    used = np.unique(model.neighbour_stiffness(0, model.ny, codes))
+    pairs = [divmod(int(code) - 1, nm) for code in used if code > 0]
+    if not pairs:  # no bond: only α·M, proportional to the mass alone
+        return ProportionalDamping(0.0, float(model.damping_mass))
+    k = np.array([model.kmat[a, b] for a, b in pairs])
+    eta = np.array([model.cmat[a, b] for a, b in pairs])
+    c = float(eta[0] / k[0])
+    if not np.all(np.abs(eta - c * k) <= PROPORTIONAL_ROUNDING * np.maximum(eta, c * k)):
+        return None
+    return ProportionalDamping(c, float(model.damping_mass))
+
+
+def proportional_divergence(pen, scene, comm, damping: ProportionalDamping, lam_min: float, tol: float,
+                            options) -> DivergenceVerdict:
+    """The damped divergence verdict of ``pen`` from the undamped verdict of its A and B
+    (module docstring): the same proof, or its modes mapped to λ ≥ 0 and certified on the
+    quadratic MEiCP; modes with σ = λ² ≥ lam_min listed.  Collective."""
+    undamped = divergence_of(pen, scene, comm, "auto", 0.0, tol, options)
+    head = (f"damping proportional to stiffness and mass ({damping.describe()}): λ²B + λD − A = (1 + cλ)(σB − A) "
+            f"with σ = (λ² + αλ)/(1 + cλ), so the undamped MEiCP of the same pencil decides it")
+    proof = undamped.proof
+    window = proof.sigma_window
+    if window:  # the undamped σ-window as σ = λ², the damped results' unit
+        window = tuple(damping.lam_of(float(s)) ** 2 if math.isfinite(s) else s for s in window)
+    if undamped.stable is not False:
+        text = f"{head}: {undamped.evidence}"
+        return DivergenceVerdict([], undamped.stable, text, undamped.eicp,
+                                 replace(proof, test=TEST if undamped.stable else "", sigma_window=window,
+                                         statement=f"{head}: {proof.statement}"))
+    modes, notes = _mapped_modes(pen, comm, damping, undamped)
+    if not modes:
+        text = (f"undecided: {head}; it found divergence ({undamped.evidence}), but no mapped mode passed the "
+                f"quadratic MEiCP's certificate {CERTIFICATE_TOL:g}: {'; '.join(notes)}")
+        return DivergenceVerdict([], None, text, undamped.eicp, DivergenceProof("", text))
+    listed = [m for m in modes if lam_min == 0 or m.sigma >= lam_min]
+    growth = ", ".join(f"{np.sqrt(m.sigma):.6g}" for m in modes[:3])
+    text = (f"{head}: {len(modes)} certified damped divergence mode(s), growth rate λ = {growth} "
+            f"({'; '.join(notes)}; the undamped verdict: {undamped.evidence})")
+    return DivergenceVerdict(listed, False, text, undamped.eicp,
+                             replace(proof, test=TEST, sigma_window=window, statement="certified mode(s)"))
+
+
+def _mapped_modes(pen, comm, damping: ProportionalDamping, undamped: DivergenceVerdict) -> tuple[list, list]:
+    """The undamped verdict's modes (every solution with σ ≥ 0 of its EiCP result) as damped
+    modes λ = λ(σ), each certified on the quadratic MEiCP; and a note on each."""
+    red = pen.maps
+    scales = (max_abs_entry(pen.A), max_abs_entry(pen.B))
+    solutions = [s for s in getattr(undamped.eicp, "solutions", None) or [] if s.lam >= lam_floor(0.0, scales)]
+    J = np.asarray(red.J, dtype=np.int64)
+    modes, notes = [], []
+    with distributed(mpi_comm(comm), pen.A, pen.B, pen.damping()) as mats, QuadraticPencilOps(*mats) as ops:
+        for sol in solutions:
+            lam = max(damping.lam_of(float(sol.lam)), 0.0)  # 0 within rounding: ≥ 0
+            res, parts, support = quadratic_certificate(ops, lam, np.asarray(sol.x, dtype=float), J)
+            if res > CERTIFICATE_TOL:
+                worst = max(parts, key=parts.get)
+                notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}: {worst} {parts[worst]:.1e}, not certified")
+                continue
+            modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=sol.x, support=support, residual=res), red))
+            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} (residual {res:.1e})")
+    modes.sort(key=lambda m: -m.sigma)
+    log.info("damped divergence (proportional damping): %s", "; ".join(notes) or "no undamped mode")
+    return modes, notes
+
+
+__all__ = ["ProportionalDamping", "proportional_damping", "proportional_divergence"]
