@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import meicp
-from meicp.contact.damped_proportional import TEST, ProportionalDamping, proportional_damping
+from meicp.contact.damped_proportional import TEST, ProportionalDamping, growing_root, proportional_damping
 from meicp.contact.problem import pencil
 from meicp.core import limits
 from meicp.examples import two_layer_scene
@@ -137,3 +137,55 @@ def test_beyond_the_enumeration_without_a_monkeypatch():
     lam = np.array([damping.lam_of(m.sigma) for m in undamped.modes])
     assert growth(r) == pytest.approx(np.sort(lam), rel=1e-9)
     assert math.sqrt(r.modes[0].sigma) < math.sqrt(undamped.modes[0].sigma)
+
+
+def test_the_divergence_onset_with_proportional_damping_is_the_undamped_one():
+    scene = damped(TWO_LAYERS, eta=(0.02, 0.1), mass=0.05)
+    r = meicp.critical_friction(scene, flutter=False)
+    undamped = meicp.critical_friction(TWO_LAYERS, flutter=False)
+    assert (r.divergence.lower, r.divergence.upper) == (undamped.divergence.lower, undamped.divergence.upper)
+    assert r.divergence.exact and "proportional to stiffness and mass" in r.divergence.evidence
+
+
+@settings(max_examples=200, deadline=None)
+@given(c=st.floats(0, 5), alpha=st.floats(0, 5), re=st.floats(-50, 5), im=st.floats(1e-6, 20))
+def test_the_growing_root_solves_the_scalar_equation_and_grows_the_faster(c, alpha, re, im):
+    damping, sigma = ProportionalDamping(c, alpha), complex(re, im)
+    lam = growing_root(damping, sigma)
+    other = -(alpha - c * sigma) - lam
+    scale = abs(lam) ** 2 + abs(alpha - c * sigma) * abs(lam) + abs(sigma)
+    assert abs(lam * lam + (alpha - c * sigma) * lam - sigma) <= 1e-13 * scale
+    assert lam.real >= other.real - 1e-13 * scale ** 0.5
+    if c == alpha == 0:
+        assert lam == pytest.approx(np.sqrt(sigma), rel=1e-14)
+
+
+#: past the dense limit (flutter_dense_max=10) with η ∝ k: a base contact (with and without a
+#: mass term) and a frictional interface, 60 columns
+SEARCHED = {
+    "base": damped(two_layer_scene(60, (3, 3), mu=1.0, states="slip+"), eta=(0.01, 0.05)),
+    "base+mass": damped(two_layer_scene(60, (3, 3), mu=1.0, states="slip+"), eta=(0.01, 0.05), mass=0.02),
+    "interface": damped(two_layer_scene(60, (3, 3), bottom="fixed", stiffness=(2.0, 1.0), density=(1.0, 1.0),
+                                        interface={"kind": "frictional", "friction": 1.0, "states": "slip+"}),
+                        eta=(0.04, 0.02)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SEARCHED))
+def test_the_undamped_search_finds_damped_flutter_modes(name):
+    """With proportional damping the search at scale is the undamped one at σ(λ₀); every mode
+    it certifies is an eigenvalue of the damped pencil's dense companion spectrum, with its
+    backward error on λ²B + λD − A itself; on the base contact the fastest is the dense fastest."""
+    scene = SEARCHED[name]
+    dense = meicp.analyze(scene)
+    r = meicp.analyze(scene, flutter_dense_max=10)
+    assert dense.flutter is True and dense.flutter_growth.exact
+    assert r.flutter is True and r.stable is False
+    assert "so the undamped search ran" in r.flutter_evidence and "not a proof" in r.flutter_evidence
+    lam_dense = np.array([np.sqrt(m.sigma) for m in dense.flutter_modes])
+    for mode in r.flutter_modes:
+        lam = np.sqrt(mode.sigma)
+        assert np.min(np.abs(lam_dense - lam)) <= 1e-10 * abs(lam) and mode.residual <= 1e-10
+    assert r.flutter_growth.lower <= dense.flutter_growth.upper <= r.flutter_growth.upper
+    if name.startswith("base"):
+        assert r.flutter_modes[0].growth_rate == pytest.approx(dense.flutter_modes[0].growth_rate, rel=1e-10)

@@ -127,3 +127,21 @@ def test_the_proportional_damped_verdict_is_the_same_on_one_and_two_ranks(comm, 
     assert two.proofs[0].test == one.proofs[0].test == TEST
     assert [m.sigma for m in two.modes] == pytest.approx([m.sigma for m in one.modes], rel=1e-10)
     assert comm.allgather(two.divergence) == [divergence] * comm.size
+
+
+def test_the_proportional_damped_flutter_search_is_the_same_on_one_and_two_ranks(comm):
+    """η ∝ k past the dense limit: the undamped search at σ(λ₀) (distributed factor and basis),
+    its modes certified on the distributed quadratic pencil, as on one rank."""
+    from mpi4py import MPI
+
+    from .test_damped_proportional import SEARCHED
+
+    scene = SEARCHED["base"]
+    two = meicp.analyze(scene, comm=comm, flutter_dense_max=10)
+    one = meicp.analyze(scene, comm=MPI.COMM_SELF, flutter_dense_max=10)
+    assert two.flutter is True and one.flutter is True and "so the undamped search ran" in two.flutter_evidence
+    lam_one = np.array([np.sqrt(m.sigma) for m in one.flutter_modes])
+    for m in two.flutter_modes:
+        assert np.min(np.abs(lam_one - np.sqrt(m.sigma))) <= 1e-10 * abs(m.sigma) ** 0.5
+    assert two.flutter_modes[0].growth_rate == pytest.approx(one.flutter_modes[0].growth_rate, rel=1e-10)
+    assert comm.bcast(two.flutter_growth.lower, root=0) == two.flutter_growth.lower

@@ -42,6 +42,7 @@ from .damped_modes import CERTIFICATE_TOL
 from .divergence.driver import divergence_of
 from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
+from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, RejectedPair
 
 log = logging.getLogger("meicp")
 
@@ -75,6 +76,17 @@ class ProportionalDamping:
     def describe(self) -> str:
         parts = ([f"{self.stiffness:g}·K"] if self.stiffness else []) + ([f"{self.mass:g}·M"] if self.mass else [])
         return "C = " + " + ".join(parts)
+
+
+def growing_root(damping: ProportionalDamping, sigma: complex) -> complex:
+    """The root of ``λ² + (α − cσ)λ − σ = 0`` with the larger real part (the other is
+    ``−(α − cσ) − λ``): the damped eigenvalue an undamped eigenvalue σ gives that grows the
+    faster.  Formed without cancellation (the product of the roots is −σ)."""
+    p = damping.mass - damping.stiffness * complex(sigma)
+    root = np.sqrt(p * p + 4 * complex(sigma))
+    big = -0.5 * (p + root) if (p.conjugate() * root).real >= 0 else -0.5 * (p - root)  # |big| the larger
+    other = -complex(sigma) / big if big != 0 else 0j
+    return big if big.real >= other.real else other
 
 
 def proportional_damping(model) -> ProportionalDamping | None:
@@ -150,4 +162,30 @@ def _mapped_modes(pen, comm, damping: ProportionalDamping, undamped: DivergenceV
     return modes, notes
 
 
-__all__ = ["ProportionalDamping", "proportional_damping", "proportional_divergence"]
+def mapped_flutter(ops, damping: ProportionalDamping, candidates, margin) -> tuple[list, list, int]:
+    """The damped flutter modes of an undamped search's certified modes ``candidates``
+    (:class:`~meicp.contact.flutter_verdict.FlutterCandidate`, σ non-real, x on every rank):
+    each σ gives λ = :func:`growing_root`, with x an eigenvector of Q(λ) = (1 + cλ)(σ(λ)B − A).
+    ``(modes, rejected, damped_out)``: FlutterCandidates with σ = λ² whose backward error on
+    Q itself (``ops``: :class:`~meicp.petsc.flutter_quadratic.QuadraticPencilOps`) passes the
+    residual gate and whose Re λ and Im λ exceed ``margin(λ, residual)``; RejectedPairs; and
+    how many grow no faster than their margin (the damping holds them).  Collective."""
+    lo, hi = ops.A.getOwnershipRange()
+    modes, rejected, damped_out = [], [], 0
+    for cand in candidates:
+        lam, x = growing_root(damping, cand.sigma), np.asarray(cand.x)
+        if lam.imag < 0:  # the conjugate pair: its eigenvector conjugated
+            lam, x = lam.conjugate(), x.conjugate()
+        res = ops.residual(lam, x[lo:hi])
+        r = margin(lam, res)
+        if res > RESIDUAL_TOL:
+            rejected.append(RejectedPair(lam * lam, res))
+        elif lam.real > r and lam.imag > r:
+            modes.append(FlutterCandidate(lam * lam, x, res, 2 * abs(lam) * r + r * r,
+                                          f"{cand.found_by}, λ = {lam:.6g} of σ = {cand.sigma:.6g}"))
+        else:
+            damped_out += 1
+    return modes, rejected, damped_out
+
+
+__all__ = ["ProportionalDamping", "growing_root", "mapped_flutter", "proportional_damping", "proportional_divergence"]

@@ -110,12 +110,16 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
     if targets is None:
         targets, why = on_root(comm, lambda: damped_targets(scene, pen.lines, n))  # one answer on every rank
         if not targets:
-            return PencilFlutter(None, [], f"damped: no target searched{why}" + search_conclusion([]),
-                                 counts={"targets": 0},
-                                 growth=search_growth([], "the damped search computes only the eigenvalues near its "
-                                                          "targets, and had none"))
+            return no_target(why)
     return _search(pen, pen.damping(), targets, why, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
                    strict_tol=strict_tol, options=options)
+
+
+def no_target(why: str) -> PencilFlutter:
+    """The verdict when the damped proxy gives no target (``why``): undecided."""
+    return PencilFlutter(None, [], f"damped: no target searched{why}" + search_conclusion([]), counts={"targets": 0},
+                         growth=search_growth([], "the damped search computes only the eigenvalues near its targets, "
+                                                  "and had none"))
 
 
 def _search(pen, D, targets, why: str, **solve) -> PencilFlutter:

@@ -36,8 +36,10 @@ from ..core.matrix import to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
 from ..petsc.mat import distributed
+from ..petsc.flutter_quadratic import QuadraticPencilOps
 from .damped import damped_flutter
-from .damped_search import search_damped_flutter
+from .damped_proportional import mapped_flutter, proportional_damping
+from .damped_search import damped_targets, growth_ceiling, lambda_margin, no_target, search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
@@ -230,6 +232,9 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
         if dense:
             return damped_flutter(pen, comm, dense_max=dense_max)
         search.pop("real_bound", None)  # the undamped pencil's Re σ bound says nothing of λ here
+        proportional = proportional_damping(pen.model) if targets is None else None
+        if proportional is not None:
+            return proportional_search(pen, scene, comm, proportional, options, search)
         if n >= limits.FLUTTER_SEARCH_LARGE:
             search = {"tol": LARGE_EPS_TOL, "strict_tol": STRICT_EPS_TOL, "low_rank": LOW_RANK_TOL, **search}
         return search_damped_flutter(pen, scene, comm, targets=targets, options=options, **search)
@@ -249,9 +254,7 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
                f"{depth_note(scene, pen.lines, n)} (dense QZ)")
         interface = not any(line.name == BASE for line in pen.lines)
         if targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM and interface:
-            search.setdefault("nev", 1)
-            search.setdefault("ncv", INTERFACE_NCV)
-            why += f", searched at its σ for {search['nev']} eigenpair(s) with a basis of {search['ncv']}"
+            why += _large_settings(n, pen.lines, search, proxy=True)
         elif targets and n >= limits.FLUTTER_OFF_CLUSTER_FROM:
             moved = [off_cluster(t, 0) for t in targets]
             why += (f", each moved up off its cluster before the first solve ({n:,} ≥ "
@@ -260,16 +263,67 @@ def pencil_flutter(pen, scene, comm=None, *, dense_max: int | None = None, optio
                     + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i → {m.real:.4g}{m.imag:+.4g}i"
                                 for t, m in zip(targets, moved)))
             targets = moved
-            search.setdefault("ncv", OFF_CLUSTER_NCV)
+            _large_settings(n, pen.lines, search, moved=True)
         if not targets:
             targets, why = lambda_line_targets(LINE_GROWTH, LINE_FREQUENCIES), LINE_WHY
+    _large_settings(n, pen.lines, search)
+    return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
+
+
+def _large_settings(n: int, lines, search: dict, *, proxy: bool = False, moved: bool = False) -> str:
+    """The search's defaults for ``n`` retained DOFs (``search`` filled in place, the caller's
+    own kept) and what they add to the evidence: an interface-strip ``proxy``'s target searched
+    where it is for one pair, a target ``moved`` off its cluster with OFF_CLUSTER_NCV; from
+    FLUTTER_SEARCH_LARGE the tolerances and the block-low-rank factor."""
+    why = ""
+    if proxy and n >= limits.FLUTTER_OFF_CLUSTER_FROM and not any(line.name == BASE for line in lines):
+        search.setdefault("nev", 1)
+        search.setdefault("ncv", INTERFACE_NCV)
+        why = f", searched at its σ for {search['nev']} eigenpair(s) with a basis of {search['ncv']}"
+    elif n >= limits.FLUTTER_OFF_CLUSTER_FROM and moved:
+        search.setdefault("ncv", OFF_CLUSTER_NCV)
     if n >= limits.FLUTTER_SEARCH_LARGE:
         search.setdefault("nev", 2)
         search.setdefault("ncv", 12)
         search.setdefault("tol", LARGE_EPS_TOL)
         search.setdefault("strict_tol", STRICT_EPS_TOL)
         search.setdefault("low_rank", LOW_RANK_TOL)
-    return search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
+    return why
+
+
+def proportional_search(pen, scene, comm, damping, options, search: dict) -> PencilFlutter:
+    """The damped flutter search past the dense limit when the damping is proportional to
+    stiffness and mass (:mod:`.damped_proportional`): every eigenvalue λ of λ²B + λD − A
+    solves ``λ² + (α − cσ)λ − σ = 0`` at an eigenvalue σ of (A, B), so the undamped search
+    (:func:`search_flutter`, on the 2n real form, not the companion's 4n) runs at σ₀ = σ(λ₀)
+    of the damped proxy's targets λ₀, and each certified σ gives its growing λ, certified
+    again on the quadratic pencil.  Collective."""
+    n = int(pen.maps.retained.size)
+    refused = memory_refusal(comm, limits.FLUTTER_SEARCH_BYTES_PER_DOF * n,
+                             f"the flutter search of {n:,} retained DOFs")
+    if refused is not None:
+        return refused
+    lam_targets, why = on_root(comm, lambda: damped_targets(scene, pen.lines, n))  # one answer on every rank
+    if not lam_targets:
+        return no_target(why)
+    targets = [complex(damping.sigma_of(complex(t))) for t in lam_targets]
+    why += (", as σ₀ = (λ₀² + αλ₀)/(1 + cλ₀) = " + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i" for t in targets)
+            + _large_settings(n, pen.lines, search, proxy=True, moved=True))
+    undamped = search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
+    with distributed(comm, pen.A, pen.B, pen.damping()) as mats, QuadraticPencilOps(*mats) as ops:
+        modes, rejected, held = mapped_flutter(ops, damping, undamped.modes, lambda lam, res: lambda_margin(ops, lam, res))
+        ceiling = growth_ceiling(ops)
+    evidence = (f"damped, {damping.describe()}: every eigenvalue λ of λ²B + λD − A solves λ² + (α − cσ)λ − σ = 0 at "
+                f"an eigenvalue σ of (A, B), so the undamped search ran — "
+                f"{undamped.evidence.removesuffix(search_conclusion(undamped.modes))} — and its {len(undamped.modes)} "
+                f"certified σ give {len(modes)} growing λ certified on λ²B + λD − A"
+                + (f", {held} held by the damping (Re λ within its margin of 0 or below)" if held else "")
+                + (f", {len(rejected)} failing the residual gate {RESIDUAL_TOL:g} there" if rejected else "")
+                + search_conclusion(modes))
+    counts = dict(undamped.counts or {}, mapped=len(undamped.modes), held=held)
+    growth = search_growth(modes, "the search computes only the eigenvalues near its targets", ceiling=ceiling)
+    return PencilFlutter(True if modes else None, _fastest_first(modes), evidence, counts=counts,
+                         rejected=list(undamped.rejected or []) + rejected, growth=growth)
 
 
 def _to_mode(candidate: FlutterCandidate, maps, branch: str) -> FlutterMode:

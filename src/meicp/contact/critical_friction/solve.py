@@ -21,6 +21,7 @@ from ...lattice.size import check_size
 from ...petsc.assembly import LatticeMatrices
 from ...scene import Scene
 from ..damped import DampingUsed
+from ..damped_proportional import proportional_damping
 from ..damped_rayleigh import divergence_free_up_to
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
@@ -38,6 +39,9 @@ log = logging.getLogger("meicp")
 DAMPED_DIVERGENCE = ("at λ = 0 the damping drops out of y = (λ²B + λD − A)x, so the smallest μ with a λ = 0 "
                      "mode is the undamped μ_c, computed here; damped modes born at λ > 0 below it are the "
                      "cross-check's (the quadratic MEiCP enumerated)")
+#: the same with damping proportional to stiffness and mass (:mod:`..damped_proportional`)
+PROPORTIONAL_DIVERGENCE = ("damping proportional to stiffness and mass makes the damped MEiCP at every μ the undamped "
+                           "one (σ = (λ² + αλ)/(1 + cλ), λ ≥ 0 ⟺ σ ≥ 0), so its onset is the undamped μ_c, computed here")
 
 
 def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = None, tol: float = 1e-8,
@@ -95,7 +99,9 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     lattice, lines = _friction_states(scene)
     divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm)
     if scene.damped:
-        divergence = dataclasses.replace(divergence, evidence=f"{DAMPED_DIVERGENCE} "
+        proportional = proportional_damping(lattice.model)
+        why = DAMPED_DIVERGENCE if proportional is None else PROPORTIONAL_DIVERGENCE
+        divergence = dataclasses.replace(divergence, evidence=f"{why} "
                                          f"({DampingUsed.of(scene).describe()}); {divergence.evidence}")
     if not flutter:
         return CriticalFriction.of(divergence, None)

@@ -12,7 +12,8 @@ class DivergenceProof:
     test: ``"enumerate"`` (or the method asked for by name), ``"rayleigh-inertia"``,
     ``"condensed-pd"``, ``"condensed-windows"``, ``"rayleigh-window+condensed-windows"``,
     ``"certified-mode"``, ``"all-held"``, the damped lattice's ``"quadratic-enumerate"`` and
-    ``"damped-rayleigh"`` (:mod:`meicp.contact.damped_rayleigh`), or ``""`` when nothing was
+    ``"damped-rayleigh"`` (:mod:`meicp.contact.damped_rayleigh`), ``"proportional-damping"``
+    (:mod:`meicp.contact.damped_proportional`: the undamped verdict decides), or ``""`` when nothing was
     proved.  statement: the
     sentence saying what was proved (or why not).  supports_visited: supports the search
     (or the enumeration) visited; None when nothing was solved.  The window procedure
