@@ -247,7 +247,8 @@ def scale_chart(args) -> None:
                                      + f"\nη = {r['eta']}, {int(r['dofs']):,} DOFs, {r['ranks']} ranks"
                                      for r in rows], fontsize=7)
     ax.set_xlabel("wall seconds (meicp solve)")
-    ax.set_title("Damped verdict at scale: damped Rayleigh bound, followed divergence modes, flutter search",
+    ax.set_title("Damped verdict at scale: damped Rayleigh bound, followed divergence modes, proportional damping "
+                 "(η = τ·k: the undamped verdict), flutter search",
                  fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=2)
     ax.set_xlim(0, 2.2 * max(float(r["solve_s"]) for r in rows))
