@@ -89,20 +89,26 @@ def growing_root(damping: ProportionalDamping, sigma: complex) -> complex:
     return big if big.real >= other.real else other
 
 
+def bonded_pairs(model) -> tuple[np.ndarray, np.ndarray]:
+    """``(k, η)`` of every pair of materials some bond of the lattice joins (the bonds a
+    frictional interface cuts do not count): the coefficients C and K are assembled from."""
+    nm = len(model.materials)
+    codes = (np.arange(nm)[:, None] * nm + np.arange(nm)[None, :] + 1).astype(float)
+    used = np.unique(model.neighbour_stiffness(0, model.ny, codes))
+    pairs = [divmod(int(code) - 1, nm) for code in used if code > 0]
+    return (np.array([model.kmat[a, b] for a, b in pairs], dtype=float),
+            np.array([model.cmat[a, b] for a, b in pairs], dtype=float))
+
+
 def proportional_damping(model) -> ProportionalDamping | None:
     """The proportional damping of a :class:`~meicp.lattice.model.LatticeModel`, or None when
     it has none or its damping is not proportional: every pair of materials a bond joins has
     ``η = c·k`` with one c (within :data:`PROPORTIONAL_ROUNDING`)."""
     if not model.damped:
         return None
-    nm = len(model.materials)
-    codes = (np.arange(nm)[:, None] * nm + np.arange(nm)[None, :] + 1).astype(float)
-    used = np.unique(model.neighbour_stiffness(0, model.ny, codes))
-    pairs = [divmod(int(code) - 1, nm) for code in used if code > 0]
-    if not pairs:  # no bond: only α·M, proportional to the mass alone
+    k, eta = bonded_pairs(model)
+    if not k.size:  # no bond: only α·M, proportional to the mass alone
         return ProportionalDamping(0.0, float(model.damping_mass))
-    k = np.array([model.kmat[a, b] for a, b in pairs])
-    eta = np.array([model.cmat[a, b] for a, b in pairs])
     c = float(eta[0] / k[0])
     if not np.all(np.abs(eta - c * k) <= PROPORTIONAL_ROUNDING * np.maximum(eta, c * k)):
         return None
@@ -188,4 +194,4 @@ def mapped_flutter(ops, damping: ProportionalDamping, candidates, margin) -> tup
     return modes, rejected, damped_out
 
 
-__all__ = ["ProportionalDamping", "growing_root", "mapped_flutter", "proportional_damping", "proportional_divergence"]
+__all__ = ["ProportionalDamping", "bonded_pairs", "growing_root", "mapped_flutter", "proportional_damping", "proportional_divergence"]

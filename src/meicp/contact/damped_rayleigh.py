@@ -41,15 +41,24 @@ def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, 
     b = B.diagonal()
     if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
         return None, "B is not diagonal with positive entries"
-    F = (maps.friction_rows() @ C @ Q).tocsr()
-    S = (0.5 * (F + F.T)).tocsr()
-    scale = 1.0 / np.sqrt(b)
-    S = sp.diags(scale) @ S @ sp.diags(scale)
-    gershgorin = float(np.asarray(abs(S).sum(axis=1)).max()) if S.nnz else 0.0
+    gershgorin, _ = friction_discs(maps, C, b)
     norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
     slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
     return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
                                                  "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+
+
+def friction_discs(maps, C: sp.spmatrix, b: np.ndarray) -> tuple[float, float]:
+    """The largest Gershgorin radii of the symmetric and the skew part of
+    ``diag(b)^-½·F·diag(b)^-½``, ``F = diag(μ)P̃₁CQ̃`` the friction rows' part of ``P̃CQ̃``
+    (a pass over the |J| friction rows); the caller adds the rounding."""
+    F = (maps.friction_rows() @ C @ sp.csr_matrix(maps.Q)).tocsr()
+    scale = sp.diags(1.0 / np.sqrt(b))
+    out = []
+    for part in (0.5 * (F + F.T), 0.5 * (F - F.T)):
+        W = (scale @ part @ scale).tocsr()
+        out.append(float(np.asarray(abs(W).sum(axis=1)).max()) if W.nnz else 0.0)
+    return out[0], out[1]
 
 
 def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e-4) -> float:

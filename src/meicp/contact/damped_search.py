@@ -26,7 +26,8 @@ from ..petsc.flutter import SlidingPencilOps
 from ..petsc.flutter_quadratic import QuadraticPencilOps, quadratic_shift_solve
 from ..petsc.mat import distributed
 from .flutter_dense import _fastest_first, _normalise
-from .flutter_growth import quadratic_ceiling, search_growth
+from .damped_flutter_free import damped_flutter_free
+from .flutter_growth import FlutterGrowth, quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             depth_note, depth_used, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
@@ -110,14 +111,26 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
     if targets is None:
         targets, why = on_root(comm, lambda: damped_targets(scene, pen.lines, n))  # one answer on every rank
         if not targets:
-            return no_target(why)
+            return no_target(pen, why)
     return _search(pen, pen.damping(), targets, why, nev=nev, ncv=ncv, tol=tol, low_rank=low_rank,
                    strict_tol=strict_tol, options=options)
 
 
-def no_target(why: str) -> PencilFlutter:
-    """The verdict when the damped proxy gives no target (``why``): undecided."""
-    return PencilFlutter(None, [], f"damped: no target searched{why}" + search_conclusion([]), counts={"targets": 0},
+def no_target(pen, why: str) -> PencilFlutter:
+    """The verdict when the damped proxy gives no target (``why``): where the proxy is proved
+    free of flutter, the damped flutter-free proof of the lattice itself
+    (:func:`~.damped_flutter_free.damped_flutter_free`: one LDLᵀ); else, or when it fails,
+    undecided.  Collective."""
+    tried = ""
+    if why == PROXY_FREE:
+        proved, statement = damped_flutter_free(pen)
+        log.info("damped flutter: %s", statement)
+        if proved:
+            return PencilFlutter(False, [], f"damped: {statement}; the damped proxy had no flutter either",
+                                 counts={"targets": 0}, growth=FlutterGrowth(0.0, 0.0, statement))
+        tried = f"; {statement}"
+    return PencilFlutter(None, [], f"damped: no target searched{why}{tried}" + search_conclusion([]),
+                         counts={"targets": 0},
                          growth=search_growth([], "the damped search computes only the eigenvalues near its targets, "
                                                   "and had none"))
 

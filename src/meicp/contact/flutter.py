@@ -305,7 +305,7 @@ def proportional_search(pen, scene, comm, damping, options, search: dict) -> Pen
         return refused
     lam_targets, why = on_root(comm, lambda: damped_targets(scene, pen.lines, n))  # one answer on every rank
     if not lam_targets:
-        return no_target(why)
+        return no_target(pen, why)
     targets = [complex(damping.sigma_of(complex(t))) for t in lam_targets]
     why += (", as σ₀ = (λ₀² + αλ₀)/(1 + cλ₀) = " + ", ".join(f"{t.real:.4g}{t.imag:+.4g}i" for t in targets)
             + _large_settings(n, pen.lines, search, proxy=True, moved=True))

@@ -68,7 +68,8 @@ def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True) -> SignProo
     ``proved is True`` gets False for both, with ``above`` the eigenvalues not proved below
     the margin."""
     with shifted_symmetric_parts(A, B, tau) as (SA, SB):
-        return negative_with_margin(SA, SB, "sym(A)" if tau == 0.0 else f"sym(A) − {tau:.6g}·sym(B)", decisive)
+        name = "sym(A)" if tau == 0.0 else f"sym(A) {'−' if tau > 0 else '+'} {abs(tau):.6g}·sym(B)"
+        return negative_with_margin(SA, SB, name, decisive)
 
 
 def symmetric_part_definite(B) -> tuple[bool, str]:

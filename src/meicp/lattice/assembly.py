@@ -25,6 +25,8 @@ one or the other by communicator; nothing here knows of PETSc.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -101,13 +103,16 @@ def stiffness_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32):
     return _bond_block(model, j0, j1, dtype, kk, kk > 0)
 
 
-def damping_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32):
+def damping_block(model: LatticeModel, j0: int, j1: int, dtype=np.int32, *, table: np.ndarray | None = None,
+                  mass: float | None = None):
     """The DOF rows of C for node rows ``[j0, j1)``, as :func:`stiffness_block` gives K's: the
     same entries (an explicit 0 where a bond has no viscosity), each bond's η in place of its
-    k, and ``α ρ a³`` added on the diagonal (``[damping] mass = α``)."""
+    k, and ``α ρ a³`` added on the diagonal (``[damping] mass = α``).  ``table`` and ``mass``:
+    another per-pair coefficient in place of the viscosities and another α."""
     present = model.neighbour_stiffness(j0, j1) > 0
-    eta = model.neighbour_stiffness(j0, j1, model.cmat)
-    diagonal = model.damping_mass * model.mass(j0, j1) if model.damping_mass else None
+    eta = model.neighbour_stiffness(j0, j1, model.cmat if table is None else table)
+    alpha = model.damping_mass if mass is None else mass
+    diagonal = alpha * model.mass(j0, j1) if alpha else None
     return _bond_block(model, j0, j1, dtype, eta, present, diagonal)
 
 
@@ -139,12 +144,21 @@ def _bond_block(model: LatticeModel, j0: int, j1: int, dtype, kk: np.ndarray, pr
 
 def assemble_scipy(model: LatticeModel, chunk_nodes: int | None = None):
     """``(K, M)`` as SciPy CSR, built chunk by chunk into exactly allocated arrays."""
-    return _stencil_csr(model, stiffness_block, chunk_nodes), mass_matrix_scipy(model)
+    return stiffness_matrix_scipy(model, chunk_nodes), mass_matrix_scipy(model)
 
 
-def damping_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None) -> sp.csr_matrix:
-    """C as SciPy CSR (K's pattern; all zero for a scene without damping)."""
-    return _stencil_csr(model, damping_block, chunk_nodes)
+def stiffness_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None) -> sp.csr_matrix:
+    """K alone as SciPy CSR."""
+    return _stencil_csr(model, stiffness_block, chunk_nodes)
+
+
+def damping_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None, *, table: np.ndarray | None = None,
+                         mass: float | None = None) -> sp.csr_matrix:
+    """C as SciPy CSR (K's pattern; all zero for a scene without damping); ``table``, ``mass``
+    as :func:`damping_block`'s."""
+    if table is None and mass is None:
+        return _stencil_csr(model, damping_block, chunk_nodes)
+    return _stencil_csr(model, functools.partial(damping_block, table=table, mass=mass), chunk_nodes)
 
 
 def _stencil_csr(model: LatticeModel, block, chunk_nodes: int | None) -> sp.csr_matrix:
