@@ -20,6 +20,10 @@ certified damped flutter mode, docs/critical-friction.md) and the divergence ons
 certified bracket — drawn on the chart as vertical lines (solid: an exact onset, its bracket
 narrower than 10⁻⁶·μ; a shaded band: a bracket that is not).
 
+``free``: the damped flutter-free proof at 10⁵ and 10⁶ DOFs (docs/damping.md, "damped
+flutter-free proof"): a shallow two-layer lattice with mass damping at small μ, where
+STABLE — both verdicts proved — is possible past the dense limit (damping_free.csv, .png).
+
 ``scale --relaxation τ``: the same with η = τ·k in every layer — damping proportional to
 stiffness, where the damped divergence is the undamped MEiCP's (docs/damping.md,
 "Proportional damping").
@@ -255,6 +259,83 @@ def scale_chart(args) -> None:
     save_figure(fig, csv_path("damping_scale").with_suffix(".png"))
 
 
+FREE_FIELDS = ["scene", "dofs", "retained", "contacts", "mu", "eta", "mass", "ranks", "verdict", "divergence",
+               "divergence_test", "flutter", "solve_s", "flutter_s", "eigensolve_s", "ratio", "peak_mb", "load1",
+               "date", "commit", "flutter_evidence"]
+
+
+def free(args) -> None:
+    """The damped flutter-free proof at scale: a two-layer lattice of ``--rows`` node rows per
+    layer (k 1 / 5, top held, every base contact slip+) widened to each of ``--dofs``, at each
+    μ of ``--mu``, with ``[damping] mass = --mass`` and viscosity ``--eta`` per layer;
+    ``meicp solve --json`` beside one SLEPc eigen-solve of the undamped pencil."""
+    import datetime
+    import tempfile
+    from pathlib import Path
+
+    import bench_scenes as bs
+    from meicp.io.results_records import scene_to_toml
+
+    path = csv_path("damping_free")
+    before = rows_before(path)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for dofs in args.dofs:
+            nx = max(dofs // (4 * args.rows), 2)
+            for mu in args.mu:
+                scene = with_viscosity(two_layer_scene(nx, (args.rows, args.rows), mu=mu, states="slip+"),
+                                       (args.eta, args.eta))
+                data = scene.to_dict()
+                data["damping"] = {"mass": args.mass}
+                scene = scene_from_dict(data)
+                file = Path(tmp) / f"free_{nx}_{mu}.toml"
+                file.write_text(scene_to_toml(scene))
+                doc, eig, peaks, _, _, timed_out, load1, solve_s = bs.side_by_side(args, args.ranks, str(file), ["-q"],
+                                                                                   args.lock)
+                seconds = eig.get("seconds")
+                row = {"scene": f"two_layer_scene({nx}, ({args.rows}, {args.rows}))", "dofs": 2 * scene.nx * scene.ny,
+                       "retained": doc.get("sizes", {}).get("retained", ""),
+                       "contacts": doc.get("sizes", {}).get("complementarity", ""), "mu": mu, "eta": args.eta,
+                       "mass": args.mass, "ranks": args.ranks,
+                       "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
+                       "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
+                       "divergence_test": ((doc.get("proofs") or [{}])[0] or {}).get("test", ""),
+                       "solve_s": f"{solve_s:.2f}", "flutter_s": f"{doc.get('timings', {}).get('flutter', float('nan')):.2f}",
+                       "eigensolve_s": f"{seconds:.3f}" if seconds else "",
+                       "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
+                       "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
+                       "date": datetime.date.today().isoformat(), "commit": bs._commit(),
+                       "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
+                rows.append(row)
+                print({k: row[k] for k in FREE_FIELDS[:16]}, flush=True)
+                write_rows(path, rows, FREE_FIELDS, keep=lambda r: row_identity(r) in before)
+    free_chart(args)
+
+
+def free_chart(args) -> None:
+    """Each run of ``free``: its time against the undamped eigen-solve, by DOFs, marked by verdict."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = read_rows(csv_path("damping_free"))
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for verdict, marker in (("STABLE", "o"), ("UNDECIDED", "x"), ("UNSTABLE", "s")):
+        pick = [r for r in rows if r["verdict"] == verdict and r["ratio"]]
+        if pick:
+            ax.scatter([int(r["dofs"]) for r in pick], [float(r["ratio"]) for r in pick], marker=marker,
+                       label=f"{verdict}", s=36)
+            for r in pick:
+                ax.annotate(f"μ = {r['mu']}", (int(r["dofs"]), float(r["ratio"])), fontsize=6,
+                            xytext=(4, 2), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_xlabel("DOFs (a shallow two-layer lattice, every base contact sliding)")
+    ax.set_ylabel("meicp solve / one undamped eigen-solve")
+    ax.set_title("Damped flutter-free proof at scale (mass damping): STABLE is a proof of both verdicts", fontsize=9)
+    ax.legend(fontsize=7)
+    save_figure(fig, csv_path("damping_free").with_suffix(".png"))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="what", required=True)
@@ -275,6 +356,16 @@ def main() -> None:
     c.add_argument("--timeout", type=float, default=1800.0, help="seconds per command")
     c.add_argument("--no-flutter", action="store_true", help="the divergence verdict only (meicp solve --no-flutter)")
     sub.add_parser("scale_chart")
+    f = sub.add_parser("free")
+    f.add_argument("--dofs", type=int, nargs="+", default=[100_000, 1_000_000])
+    f.add_argument("--rows", type=int, default=3, help="node rows of each of the two layers")
+    f.add_argument("--mu", type=float, nargs="+", default=[0.005, 0.01, 0.05])
+    f.add_argument("--mass", type=float, default=0.1, help="[damping] mass")
+    f.add_argument("--eta", type=float, default=0.0, help="viscosity of both layers")
+    f.add_argument("--ranks", type=int, default=2)
+    f.add_argument("--lock", help="flock this file around both commands")
+    f.add_argument("--timeout", type=float, default=1800.0, help="seconds per command")
+    sub.add_parser("free_chart")
     args = p.parse_args()
     globals()[args.what](args)
 
