@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import glob
 import importlib.util
+import resource
 import signal
 import sys
 
@@ -89,8 +90,24 @@ def import_petsc():
             raise MissingDependency(describe([f"PETSc/SLEPc cannot be loaded: {type(exc).__name__}: "
                                               f"{exc}"])) from exc
         _give_sigpipe_back()
+        _raise_stack_limit()
     from petsc4py import PETSc
     return PETSc
+
+
+def _raise_stack_limit() -> None:
+    """Let the main thread's stack grow to the hard limit, as MUMPS' users are told to
+    (``ulimit -s unlimited``): its analysis and factorisation recurse over the elimination
+    tree, which on a long, shallow lattice is deep — a 6-row, 83,333-column lattice (10⁶ DOFs)
+    ended in a segmentation fault under the default 8 MB (docs/benchmarks-notes.md,
+    "stack limit").  The main thread's stack grows on demand to the limit in force then; the
+    memory is used only where the recursion reaches."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_STACK)
+    if soft != resource.RLIM_INFINITY and (hard == resource.RLIM_INFINITY or soft < hard):
+        try:
+            resource.setrlimit(resource.RLIMIT_STACK, (hard, hard))
+        except (ValueError, OSError):  # a limit the system refuses: MUMPS keeps the one it had
+            pass
 
 
 def start() -> None:

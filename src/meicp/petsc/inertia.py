@@ -34,10 +34,12 @@ ROUNDING = 16.0
 #: MUMPS settings under which PETSc asks it for the inertia: ICNTL(13) = 1 (no ScaLAPACK
 #: root) and ICNTL(24) = 1 (null pivot detection), required in parallel
 INERTIA_OPTIONS = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
-#: the ordering, as every other factorisation here: AMF (ICNTL(7) = 2; no METIS in Debian's
-#: MUMPS): the Rayleigh bound at 0 of extensive_interface.toml (10⁶ DOFs, 2 ranks) 5.4 s against
-#: 7.3 s with MUMPS' automatic choice (PORD) (docs/benchmarks-notes.md, "inertia ordering")
-ORDERING = {"mat_mumps_icntl_7": 2}
+#: the ordering: PORD (ICNTL(7) = 4, nested dissection; no METIS in Debian's MUMPS).  AMF, the
+#: other factorisations' choice, was 1.1–1.4 s faster on the shipped 10⁶-DOF scenes but took
+#: 64 s where PORD takes 2.6 s on a 6-row, 83,333-column lattice (10⁶ DOFs, 2 ranks): a local
+#: ordering of a long strip builds a deep, narrow elimination tree (docs/benchmarks-notes.md,
+#: "inertia ordering")
+ORDERING = {"mat_mumps_icntl_7": 4}
 
 
 def inertia(A) -> tuple[int, int, int]:
