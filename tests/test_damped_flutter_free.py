@@ -115,3 +115,18 @@ def test_where_the_proof_fails_the_verdict_stays_undecided_and_says_why():
     r = meicp.analyze(damped(SHALLOW.with_friction(0.05), mass=0.1))
     assert r.flutter is None and r.stable is None
     assert "damped flutter-free proof failed" in r.flutter_evidence and "no target searched" in r.flutter_evidence
+
+
+def test_past_the_dense_limit_the_damped_flutter_onset_has_a_proved_lower_end(monkeypatch):
+    """The search proves flutter, never its absence; with damping the flutter-free proof
+    gives the onset a lower end (two inertias per μ tried), never above the dense onset."""
+    from meicp.core import limits
+
+    scene = damped(two_layer_scene(6, (2, 2), mu=0.01, states="slip+"), mass=0.1)
+    dense = meicp.critical_friction(scene, mu_max=5.0)
+    with monkeypatch.context() as m:
+        m.setattr(limits, "FLUTTER_DENSE_MAX", 10)
+        r = meicp.critical_friction(scene, mu_max=5.0)
+    assert 0 < r.flutter.lower <= dense.flutter.lower
+    assert r.flutter.lower <= r.flutter.upper
+    assert "no eigenvalue of the damped sliding pencil grows for any μ in [0," in r.flutter.evidence

@@ -31,6 +31,7 @@ rank, the inertia collective.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -38,6 +39,7 @@ import scipy.sparse as sp
 from ..lattice.assembly import damping_matrix_scipy, mass_matrix_scipy, stiffness_matrix_scipy
 from .damped_proportional import bonded_pairs
 from .damped_rayleigh import friction_discs
+from .problem import pencil_of
 from .rayleigh import rayleigh_bound
 
 #: every bound's relative allowance for the rounding of the products and sums that form it
@@ -72,50 +74,123 @@ def needed_shift(beta: float, delta: float, d0_at) -> float:
     return hi
 
 
+@dataclass(frozen=True)
+class Bounds:
+    """The row-pass bounds of one sliding pencil (module docstring): β, the split's c and α,
+    ν₊ and δ₊ of C₊'s friction rows, the rounding ε, with ``grow`` charged on each."""
+
+    beta: float
+    c: float
+    alpha: float
+    nu: float
+    delta_plus: float
+    eps: float
+
+    @property
+    def delta(self) -> float:
+        return self.c * self.beta + self.delta_plus + self.eps
+
+    def d0(self, g: float) -> float:
+        return (self.alpha + self.c * g) / (1 + ROUNDING) - self.nu - self.eps
+
+    def needed(self) -> float:
+        """The smallest g with which an inertia proves it (inf: none)."""
+        return needed_shift(self.beta, self.delta, self.d0)
+
+    def describe(self) -> str:
+        return (f"C = {self.c:.4g}·K + {self.alpha:.4g}·M + C₊ (C₊ ⪰ 0, its friction rows' discs {self.nu:.3g}, "
+                f"{self.delta_plus:.3g}; rounding {self.eps:.2g}), |Im xᴴAx/xᴴBx| ≤ β = {self.beta:.4g}")
+
+
+class Lattice:
+    """K, M, C and the excess C₊ of a lattice (SciPy, every rank alike), made once for every
+    pencil and every μ the bounds are asked at."""
+
+    def __init__(self, model):
+        self.c, self.alpha = stiffness_part(model)
+        self.K, self.M, self.C = stiffness_matrix_scipy(model), mass_matrix_scipy(model), damping_matrix_scipy(model)
+        self.excess = damping_matrix_scipy(model, table=np.clip(model.cmat - self.c * model.kmat, 0.0, None),
+                                           mass=0.0)
+
+    def bounds(self, maps) -> tuple[Bounds | None, str]:
+        """The :class:`Bounds` of the pencil of ``maps``, or None and why not."""
+        Q = sp.csr_matrix(maps.Q)
+        if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
+            return None, "not tried: P̃₀ ≠ Q̃ᵀ"
+        B = (maps.P @ self.M @ Q).tocsr()
+        b = B.diagonal()
+        if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
+            return None, "not tried: B is not diagonal with positive entries"
+        c, alpha, grow = self.c, self.alpha, 1 + ROUNDING
+        _, beta = friction_discs(maps, self.K, b)
+        nu, delta_plus = friction_discs(maps, self.excess, b)
+        eps = (_discs(maps, self.C - c * self.K - alpha * self.M - self.excess, b)
+               + ROUNDING * _discs(maps, abs(self.C) + c * abs(self.K) + alpha * self.M, b))
+        return Bounds(beta * grow, c, alpha, nu * grow, delta_plus * grow, eps), ""
+
+
 def damped_flutter_free(pen) -> tuple[bool, str]:
     """``(proved, statement)``: whether every eigenvalue of the damped sliding pencil ``pen``
     has Re λ < 0 (module docstring), and the sentence saying what was shown or why not.
     Collective on the pencil's communicator (every rank computes the same bounds)."""
-    maps, model = pen.maps, pen.model
-    Q = sp.csr_matrix(maps.Q)
-    if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
-        return False, "not tried: P̃₀ ≠ Q̃ᵀ"
-    M = mass_matrix_scipy(model)
-    B = (maps.P @ M @ Q).tocsr()
-    b = B.diagonal()
-    if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
-        return False, "not tried: B is not diagonal with positive entries"
-    c, alpha = stiffness_part(model)
-    K, C = stiffness_matrix_scipy(model), damping_matrix_scipy(model)
-    excess = damping_matrix_scipy(model, table=np.clip(model.cmat - c * model.kmat, 0.0, None), mass=0.0)
-    grow = 1 + ROUNDING
-    _, beta = friction_discs(maps, K, b)
-    nu, delta_plus = friction_discs(maps, excess, b)
-    eps = _discs(maps, C - c * K - alpha * M - excess, b) + ROUNDING * _discs(maps, abs(C) + c * abs(K) + alpha * M, b)
-    beta, nu, delta_plus = beta * grow, nu * grow, delta_plus * grow
-    delta = c * beta + delta_plus + eps
-    g = needed_shift(beta, delta, lambda g: (alpha + c * g) / grow - nu - eps)
-    split = (f"C = {c:.4g}·K + {alpha:.4g}·M + C₊ (C₊ ⪰ 0, its friction rows' discs {nu:.3g}, {delta_plus:.3g}; "
-             f"rounding {eps:.2g}), |Im xᴴAx/xᴴBx| ≤ β = {beta:.4g}")
+    bounds, why = Lattice(pen.model).bounds(pen.maps)
+    if bounds is None:
+        return False, why
+    g = bounds.needed()
     if not math.isfinite(g):
-        return False, (f"damped flutter-free proof not possible: {split}; Re xᴴDx/xᴴBx ≥ α + c·g − {nu + eps:.3g} "
-                       "stays too small for any g")
-    bound = rayleigh_bound(pen.A, pen.B, -g, decisive=False)
-    if not bound.proved:
-        return False, (f"damped flutter-free proof failed: it needs sym(A) + g·B ≺ 0 with g = {g:.6g} ({split}), "
-                       f"and {bound.reason}")
-    return True, (f"no eigenvalue grows (a proof): {bound.reason}, so Re xᴴAx/xᴴBx < −{g:.6g} for every x; {split}; "
-                  f"so Re xᴴDx/xᴴBx ≥ {(alpha + c * g) / grow - nu - eps:.4g} > 0 and |Im| ≤ {delta:.4g}, and "
+        return False, (f"damped flutter-free proof not possible: {bounds.describe()}; Re xᴴDx/xᴴBx ≥ α + c·g − "
+                       f"{bounds.nu + bounds.eps:.3g} stays too small for any g")
+    proof = rayleigh_bound(pen.A, pen.B, -g, decisive=False)
+    if not proof.proved:
+        return False, (f"damped flutter-free proof failed: it needs sym(A) + g·B ≺ 0 with g = {g:.6g} "
+                       f"({bounds.describe()}), and {proof.reason}")
+    return True, (f"no eigenvalue grows (a proof): {proof.reason}, so Re xᴴAx/xᴴBx < −{g:.6g} for every x; "
+                  f"{bounds.describe()}; so Re xᴴDx/xᴴBx ≥ {bounds.d0(g):.4g} > 0 and |Im| ≤ {bounds.delta:.4g}, and "
                   "λ² + dλ − a = 0 has both roots in Re λ < 0 (Hurwitz)")
 
 
+def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4) -> tuple[float, str]:
+    """``(m, statement)``: the largest m ≤ ``upper`` (to ``rel``) such that no eigenvalue of
+    the damped sliding pencil of ``maps`` grows at any μ in [0, m] (every contact at μ); 0 when
+    nothing is proved.  At μ ≤ m every bound is at most its value at m (β, ν₊, δ₊ and ε grow
+    with μ; B does not depend on it), so g = g(m) serves every μ in [0, m], and
+    ``sym(A(μ)) + g·B`` is affine in μ: negative definite at 0 and at m (two inertias), it is
+    so on [0, m].  Bisection on m.  ``lattice``: the SciPy
+    :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction; every rank alike."""
+    pieces = Lattice(lattice.model)
+
+    def proved(m: float) -> bool:
+        bounds, _ = pieces.bounds(maps.with_friction(m))
+        g = math.inf if bounds is None else bounds.needed()
+        if not math.isfinite(g):
+            return False
+        for mu in (0.0, m):
+            pen = pencil_of(lattice, lines, (), maps=maps.with_friction(mu))
+            if pen.A is not None and not rayleigh_bound(pen.A, pen.B, -g, decisive=False).proved:
+                return False
+        return True
+
+    if not math.isfinite(upper) or upper <= 0 or not proved(0.0):
+        return 0.0, "the damped flutter-free proof does not hold at μ = 0"
+    lo, hi = 0.0, upper
+    if proved(hi):
+        lo = hi
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if proved(mid) else (lo, mid)
+    return lo, (f"no eigenvalue of the damped sliding pencil grows for any μ in [0, {lo:.8g}] (the damped flutter-free "
+                "proof with the bounds at its upper end, sym(A(μ)) + g·B ≺ 0 at both ends, affine in μ: a proof)")
+
+
 def _discs(maps, X: sp.spmatrix, b: np.ndarray) -> float:
-    """A bound on ‖diag(b)^-½ P̃XQ̃ diag(b)^-½‖₂: the larger of its row and column sums."""
+    """A bound on ‖diag(b)^-½ P̃XQ̃ diag(b)^-½‖₂: the larger row or column sum of
+    ``diag(b)^-½ |P̃||X||Q̃| diag(b)^-½`` — entrywise above |P̃XQ̃|, and growing with μ (|P̃| =
+    |P̃₀| + μ|P̃₁|: their entries lie in different columns)."""
     scale = sp.diags(1.0 / np.sqrt(b))
-    W = abs(scale @ (maps.P @ X @ sp.csr_matrix(maps.Q)) @ scale).tocsr()
+    W = (scale @ (abs(maps.P) @ abs(X) @ abs(sp.csr_matrix(maps.Q))) @ scale).tocsr()
     if not W.nnz:
         return 0.0
     return float(max(np.asarray(W.sum(axis=1)).max(), np.asarray(W.sum(axis=0)).max()))
 
 
-__all__ = ["damped_flutter_free", "needed_shift", "stiffness_part"]
+__all__ = ["Bounds", "damped_flutter_free", "flutter_free_up_to", "needed_shift", "stiffness_part"]

@@ -13,7 +13,9 @@ a collision, often the onset itself: the bracket is then reported as it stands.
 
 Past :data:`~meicp.core.limits.FLUTTER_DENSE_MAX` retained DOFs only the search
 (:func:`~meicp.contact.flutter.pencil_flutter`) is affordable; it proves flutter, never its
-absence, so the lower end is 0 and the upper end the smallest μ tried with a certified mode.
+absence, so the upper end is the smallest μ tried with a certified mode and the lower end 0 —
+on a damped lattice the largest μ up to which every eigenvalue is proved to decay
+(:func:`~meicp.contact.damped_flutter_free.flutter_free_up_to`).
 With grazing contacts every branch (:func:`~meicp.contact.flutter.grazing_branches`) has its
 own pencil: flutter is certified at a μ when every branch has it, excluded where no branch
 can have it, as in ``analyze``.
@@ -34,6 +36,7 @@ from ...petsc.pencil import reduced_pencil
 from ..flutter import _to_mode, grazing_branches, pencil_flutter
 from ..damped import classify_spectrum
 from ..damped_cover import QuadraticFamily, damped_cover_step
+from ..damped_flutter_free import flutter_free_up_to
 from ..flutter_dense import dense_flutter
 from ..flutter_cover import PencilFamily, cover_step
 from ..maps import reduced_system
@@ -347,9 +350,10 @@ def _dense_result(st: _DenseOnset, mu_max: float) -> Onset:
 
 
 def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, options) -> Onset:
-    """The upper end alone, by the search (it proves flutter, never its absence): the
-    smallest μ tried with a certified mode in every branch, lowered by bisection on the
-    search's verdict within ``limits.FLUTTER_ONSET_SEARCHES``; the lower end 0.  Collective."""
+    """The upper end by the search (it proves flutter, never its absence): the smallest μ
+    tried with a certified mode in every branch, lowered by bisection on the search's verdict
+    within ``limits.FLUTTER_ONSET_SEARCHES``; the lower end 0, or on a damped lattice the
+    largest μ up to which the damped flutter-free proof holds.  Collective."""
     budget = Budget(limits.FLUTTER_ONSET_SEARCHES, limits.FLUTTER_ONSET_SECONDS)
 
     def verdict(mu):
@@ -384,15 +388,30 @@ def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, op
             upper, mode = mid, found
         else:
             below = mid  # no certified mode there: not a proof of anything, only where to look
-    text = (f"{_order_text(branches)}: the search proves flutter, never its absence, so nothing is proved "
-            f"below the upper end (lower end 0, not exact); searched at μ = {', '.join(f'{m:.6g}' for m in tried)}")
+    lower, proof = _flutter_free_below(lattice, branches, upper if np.isfinite(upper) else mu_max)
+    text = (f"{_order_text(branches)}: the search proves flutter, never its absence, so "
+            + (proof + "; " if lower > 0 else "nothing is proved below the upper end (lower end 0, not exact); ")
+            + f"searched at μ = {', '.join(f'{m:.6g}' for m in tried)}")
     if mode is not None:
         text += f"; a certified {_mode_text(mode, _damped([b.family for b in branches]))} at μ = {upper:.10g} ({mode.found_by})"
     else:
         text += ": no certified flutter mode"
     if budget.out:
         text += "; " + budget.text("searches")
-    return Onset(0.0, upper, False, text, mode)
+    return Onset(min(lower, upper), upper, bool(np.isfinite(upper) and upper - lower <= FLUTTER_EXACT_WIDTH * upper),
+                 text, mode)
+
+
+def _flutter_free_below(lattice, branches, upper: float) -> tuple[float, str]:
+    """The lower end past the dense limit of a damped lattice: the largest m ≤ ``upper`` with
+    every branch's damped sliding pencil proved free of growing eigenvalues on [0, m]
+    (:func:`~meicp.contact.damped_flutter_free.flutter_free_up_to`), and what it proved; 0
+    undamped (no such proof there: regular lattices flutter at tiny μ)."""
+    if not _damped([b.family for b in branches]) or not np.isfinite(upper) or upper <= 0:
+        return 0.0, ""
+    ends = [flutter_free_up_to(lattice, b.lines, b.family.maps, upper) for b in branches]
+    lower = min(m for m, _ in ends)
+    return lower, "; ".join(text for _, text in ends)
 
 
 def _mode_text(mode, damped: bool) -> str:
