@@ -74,3 +74,15 @@ def test_licence_and_typing_marker_ship():
 
 def test_missing_mpi4py_is_named_before_mpi_starts():
     _assert_told(_run(sys.executable, blocked=["mpi4py"]), "mpi4py is missing")
+
+
+def test_petsc_runs_with_the_stack_limit_raised_to_the_hard_one():
+    """MUMPS recurses over the elimination tree: a long, shallow lattice crashed under the
+    default 8 MB (docs/benchmarks-notes.md, "stack limit")."""
+    import resource
+
+    from meicp.petsc import import_petsc
+
+    import_petsc()
+    soft, hard = resource.getrlimit(resource.RLIMIT_STACK)
+    assert soft == hard or soft == resource.RLIM_INFINITY
