@@ -102,7 +102,7 @@ class Bounds:
                 f"{self.delta_plus:.3g}; rounding {self.eps:.2g}), |Im xᴴAx/xᴴBx| ≤ β = {self.beta:.4g}")
 
 
-class Lattice:
+class DampingSplit:
     """K, M, C and the excess C₊ of a lattice (SciPy, every rank alike), made once for every
     pencil and every μ the bounds are asked at."""
 
@@ -133,7 +133,7 @@ def damped_flutter_free(pen) -> tuple[bool, str]:
     """``(proved, statement)``: whether every eigenvalue of the damped sliding pencil ``pen``
     has Re λ < 0 (module docstring), and the sentence saying what was shown or why not.
     Collective on the pencil's communicator (every rank computes the same bounds)."""
-    bounds, why = Lattice(pen.model).bounds(pen.maps)
+    bounds, why = DampingSplit(pen.model).bounds(pen.maps)
     if bounds is None:
         return False, why
     g = bounds.needed()
@@ -157,7 +157,7 @@ def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4)
     ``sym(A(μ)) + g·B`` is affine in μ: negative definite at 0 and at m (two inertias), it is
     so on [0, m].  Bisection on m.  ``lattice``: the SciPy
     :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction; every rank alike."""
-    pieces = Lattice(lattice.model)
+    pieces = DampingSplit(lattice.model)
 
     def proved(m: float) -> bool:
         bounds, _ = pieces.bounds(maps.with_friction(m))
