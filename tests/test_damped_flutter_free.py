@@ -130,3 +130,19 @@ def test_past_the_dense_limit_the_damped_flutter_onset_has_a_proved_lower_end(mo
     assert 0 < r.flutter.lower <= dense.flutter.lower
     assert r.flutter.lower <= r.flutter.upper
     assert "no eigenvalue of the damped sliding pencil grows for any μ in [0," in r.flutter.evidence
+
+
+def test_a_tiny_pencil_past_a_tiny_dense_limit_does_not_end_the_process():
+    """The flutter-free proof's inertia of a small pencil: PORD (the long lattices' ordering)
+    exits the process on small or dense matrices, so below PORD_FROM rows it is not used (a
+    subprocess, so that a regression fails this test, not the whole run)."""
+    import subprocess
+    import sys
+
+    code = ("import meicp\nfrom meicp.examples import two_layer_scene\n"
+            "from meicp.io.scene import scene_from_dict\n"
+            "d = two_layer_scene(2, (1, 1), mu=0.3, states='slip+').to_dict(); d['damping'] = {'mass': 0.1}\n"
+            "r = meicp.analyze(scene_from_dict(d), flutter_dense_max=1)\nprint('flutter', r.flutter)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "flutter" in out.stdout

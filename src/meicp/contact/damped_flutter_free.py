@@ -115,6 +115,8 @@ class DampingSplit:
     def bounds(self, maps) -> tuple[Bounds | None, str]:
         """The :class:`Bounds` of the pencil of ``maps``, or None and why not."""
         Q = sp.csr_matrix(maps.Q)
+        if Q.shape[1] == 0:
+            return None, "not tried: no retained DOF"
         if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
             return None, "not tried: P̃₀ ≠ Q̃ᵀ"
         B = (maps.P @ self.M @ Q).tocsr()
@@ -164,7 +166,7 @@ def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4)
         g = math.inf if bounds is None else bounds.needed()
         if not math.isfinite(g):
             return False
-        for mu in (0.0, m):
+        for mu in sorted({0.0, m}):
             pen = pencil_of(lattice, lines, (), maps=maps.with_friction(mu))
             if pen.A is not None and not rayleigh_bound(pen.A, pen.B, -g, decisive=False).proved:
                 return False

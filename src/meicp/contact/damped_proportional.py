@@ -42,7 +42,7 @@ from .damped_modes import CERTIFICATE_TOL
 from .divergence.driver import divergence_of
 from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
-from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, RejectedPair
+from .flutter_verdict import RESIDUAL_TOL, SAME, FlutterCandidate, RejectedPair
 
 log = logging.getLogger("meicp")
 
@@ -186,6 +186,8 @@ def mapped_flutter(ops, damping: ProportionalDamping, candidates, margin) -> tup
         r = margin(lam, res)
         if res > RESIDUAL_TOL:
             rejected.append(RejectedPair(lam * lam, res))
+        elif any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):
+            continue  # σ and its conjugate give one mode
         elif lam.real > r and lam.imag > r:
             modes.append(FlutterCandidate(lam * lam, x, res, 2 * abs(lam) * r + r * r,
                                           f"{cand.found_by}, λ = {lam:.6g} of σ = {cand.sigma:.6g}"))

@@ -34,12 +34,16 @@ ROUNDING = 16.0
 #: MUMPS settings under which PETSc asks it for the inertia: ICNTL(13) = 1 (no ScaLAPACK
 #: root) and ICNTL(24) = 1 (null pivot detection), required in parallel
 INERTIA_OPTIONS = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
-#: the ordering: PORD (ICNTL(7) = 4, nested dissection; no METIS in Debian's MUMPS).  AMF, the
-#: other factorisations' choice, was 1.1–1.4 s faster on the shipped 10⁶-DOF scenes but took
-#: 64 s where PORD takes 2.6 s on a 6-row, 83,333-column lattice (10⁶ DOFs, 2 ranks): a local
-#: ordering of a long strip builds a deep, narrow elimination tree (docs/benchmarks-notes.md,
-#: "inertia ordering")
-ORDERING = {"mat_mumps_icntl_7": 4}
+#: the ordering: AMF (ICNTL(7) = 2; no METIS in Debian's MUMPS), and PORD (4, nested
+#: dissection) from PORD_FROM rows.  AMF was 1.1–1.4 s faster on the shipped 10⁶-DOF scenes
+#: but took 64 s where PORD takes 2.6 s on a 6-row, 83,333-column lattice (10⁶ DOFs, 2 ranks):
+#: a local ordering of a long strip builds a deep, narrow elimination tree
+#: (docs/benchmarks-notes.md, "inertia ordering").  PORD ends the process (exit, no error
+#: returned) on small or dense matrices ("no valid number of stages in multisector": every
+#: dense n ≤ 50 tried, a 2-column lattice's pencil), hence AMF below PORD_FROM
+ORDERING = {"mat_mumps_icntl_7": 2}
+PORD_ORDERING = {"mat_mumps_icntl_7": 4}
+PORD_FROM = 100_000
 
 
 def inertia(A) -> tuple[int, int, int]:
@@ -48,8 +52,9 @@ def inertia(A) -> tuple[int, int, int]:
     ksp = PETSc.KSP().create(comm=A.getComm())
     try:
         ksp.setOperators(A)
+        ordering = PORD_ORDERING if A.getSize()[0] >= PORD_FROM else ORDERING
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
-                    "pc_factor_mat_solver_type": "mumps", **ORDERING, **INERTIA_OPTIONS}
+                    "pc_factor_mat_solver_type": "mumps", **ordering, **INERTIA_OPTIONS}
         with OptionsScope(PREFIX, defaults) as scope:
             scope.configure(ksp)
             require_mumps_factor(ksp, PREFIX, ("cholesky",), "the inertia proof")
