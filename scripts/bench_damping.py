@@ -168,8 +168,28 @@ def chart(args) -> None:
     save_figure(fig, csv_path("damping_growth").with_suffix(".png"))
 
 
-def scale(args) -> None:
+def solve_row(args, doc: dict, eig: dict, peaks, timed_out: bool, load1: float, solve_s: float) -> dict:
+    """The CSV fields of one ``meicp solve --json`` run (``doc``) and the eigen-solve beside it
+    (``eig``; :func:`bench_scenes.side_by_side`'s answers) that ``scale`` and ``free`` share."""
     import datetime
+
+    import bench_scenes as bs
+
+    seconds = eig.get("seconds")
+    return {"retained": doc.get("sizes", {}).get("retained", ""),
+            "contacts": doc.get("sizes", {}).get("complementarity", ""), "ranks": args.ranks,
+            "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
+            "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
+            "divergence_test": ((doc.get("proofs") or [{}])[0] or {}).get("test", ""),
+            "solve_s": f"{solve_s:.2f}", "flutter_s": f"{doc.get('timings', {}).get('flutter', float('nan')):.2f}",
+            "eigensolve_s": f"{seconds:.3f}" if seconds else "",
+            "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
+            "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
+            "date": datetime.date.today().isoformat(), "commit": bs._commit(),
+            "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
+
+
+def scale(args) -> None:
     import tempfile
     from pathlib import Path
 
@@ -205,20 +225,10 @@ def scale(args) -> None:
             growth = doc.get("flutter_growth") or {}
             seconds = eig.get("seconds")
             row = {"scene": f"{stem}.toml", "eta": eta, "friction": mu, "dofs": 2 * scene.nx * scene.ny,
-                   "retained": doc.get("sizes", {}).get("retained", ""),
-                   "contacts": doc.get("sizes", {}).get("complementarity", ""), "ranks": args.ranks,
-                   "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
-                   "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
-                   "divergence_test": ((doc.get("proofs") or [{}])[0] or {}).get("test", ""),
+                   **solve_row(args, doc, eig, peaks, timed_out, load1, solve_s),
                    "flutter_lower": growth.get("lower", ""), "modes": len(doc.get("flutter_modes") or []),
-                   "solve_s": f"{solve_s:.2f}", "flutter_s": f"{timings.get('flutter', float('nan')):.2f}",
                    "static_s": f"{timings.get('static', 0.0):.2f}",
-                   "eigensolve_s": f"{seconds:.3f}" if seconds else "",
-                   "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
-                   "flutter_ratio": f"{timings.get('flutter', float('nan')) / seconds:.2f}" if seconds else "",
-                   "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
-                   "date": datetime.date.today().isoformat(), "commit": bs._commit(),
-                   "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
+                   "flutter_ratio": f"{timings.get('flutter', float('nan')) / seconds:.2f}" if seconds else ""}
             rows.append(row)
             print({k: row[k] for k in SCALE_FIELDS[:18]}, flush=True)
             write_rows(path, rows, SCALE_FIELDS, keep=lambda r: row_identity(r) in before)
@@ -269,7 +279,6 @@ def free(args) -> None:
     layer (k 1 / 5, top held, every base contact slip+) widened to each of ``--dofs``, at each
     μ of ``--mu``, with ``[damping] mass = --mass`` and viscosity ``--eta`` per layer;
     ``meicp solve --json`` beside one SLEPc eigen-solve of the undamped pencil."""
-    import datetime
     import tempfile
     from pathlib import Path
 
@@ -292,20 +301,9 @@ def free(args) -> None:
                 file.write_text(scene_to_toml(scene))
                 doc, eig, peaks, _, _, timed_out, load1, solve_s = bs.side_by_side(args, args.ranks, str(file), ["-q"],
                                                                                    args.lock)
-                seconds = eig.get("seconds")
                 row = {"scene": f"two_layer_scene({nx}, ({args.rows}, {args.rows}))", "dofs": 2 * scene.nx * scene.ny,
-                       "retained": doc.get("sizes", {}).get("retained", ""),
-                       "contacts": doc.get("sizes", {}).get("complementarity", ""), "mu": mu, "eta": args.eta,
-                       "mass": args.mass, "ranks": args.ranks,
-                       "verdict": "TIMEOUT" if timed_out else doc.get("verdict", "ERROR"),
-                       "divergence": doc.get("divergence"), "flutter": doc.get("flutter"),
-                       "divergence_test": ((doc.get("proofs") or [{}])[0] or {}).get("test", ""),
-                       "solve_s": f"{solve_s:.2f}", "flutter_s": f"{doc.get('timings', {}).get('flutter', float('nan')):.2f}",
-                       "eigensolve_s": f"{seconds:.3f}" if seconds else "",
-                       "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
-                       "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
-                       "date": datetime.date.today().isoformat(), "commit": bs._commit(),
-                       "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
+                       "mu": mu, "eta": args.eta, "mass": args.mass,
+                       **solve_row(args, doc, eig, peaks, timed_out, load1, solve_s)}
                 rows.append(row)
                 print({k: row[k] for k in FREE_FIELDS[:16]}, flush=True)
                 write_rows(path, rows, FREE_FIELDS, keep=lambda r: row_identity(r) in before)
