@@ -57,6 +57,16 @@ def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float) -> flo
     return MARGIN * residual * ops.scale(lam) / max(2 * abs(lam) * norm_B + norm_D, np.finfo(float).tiny)
 
 
+def zero_reach(ops: QuadraticPencilOps, residual: float) -> float:
+    """How far from 0 rounding can carry an eigenvalue split off a double λ = 0: a motion that
+    neither the stiffness nor the damping resists (a rigid slide, Av = Dv = 0) makes λ = 0 a
+    Jordan block, which a backward error η splits by ~√η, not η (a scene with free sides and
+    Kelvin–Voigt damping gave three "modes" at |λ| ≈ 6e-8).  ``s·√(MARGIN·η)`` with s = √(‖A‖/‖B‖)
+    the pencil's λ scale; a pair nearer 0 is not certified."""
+    norm_A, norm_B, _ = ops.norms
+    return float(np.sqrt(MARGIN * residual * norm_A / max(norm_B, np.finfo(float).tiny)))
+
+
 def moved_off(lam0: complex, attempt: int) -> complex:
     """λ₀ moved up off a cluster as the undamped search moves σ (:func:`~.flutter_proxy.off_cluster`
     of σ₀ = λ₀²)."""
@@ -174,7 +184,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
                 r = lambda_margin(ops, lam, res)
                 if res > RESIDUAL_TOL:
                     rejected.append(RejectedPair(lam * lam, res))
-                elif lam.imag > r and lam.real > r:
+                elif lam.imag > r and lam.real > r and abs(lam) > zero_reach(ops, res):
                     if not any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):
                         modes.append(FlutterCandidate(lam * lam, _normalise(x), res, 2 * abs(lam) * r + r * r,
                                                       f"companion shift-invert at λ₀ = {lam0:.6g}"))
