@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..lattice.assembly import damping_matrix_scipy, mass_matrix_scipy, stiffness_matrix_scipy
+from ..lattice.assembly import damping_matrix_scipy
 from .damped_proportional import bonded_pairs
-from .damped_rayleigh import friction_discs
+from .damped_rayleigh import diagonal_mass, friction_discs
 from .problem import pencil_of
 from .rayleigh import rayleigh_bound
 
@@ -103,26 +103,22 @@ class Bounds:
 
 
 class DampingSplit:
-    """K, M, C and the excess C₊ of a lattice (SciPy, every rank alike), made once for every
-    pencil and every μ the bounds are asked at."""
+    """K, M, C of an assembled lattice (:class:`~meicp.petsc.assembly.LatticeMatrices`: SciPy on
+    every rank, its own when serial) and the excess C₊, made once for every pencil and every μ
+    the bounds are asked at."""
 
-    def __init__(self, model):
+    def __init__(self, lattice):
+        model = lattice.model
         self.c, self.alpha = stiffness_part(model)
-        self.K, self.M, self.C = stiffness_matrix_scipy(model), mass_matrix_scipy(model), damping_matrix_scipy(model)
+        (self.K, self.M), self.C = lattice.whole(), lattice.damping()
         self.excess = damping_matrix_scipy(model, table=np.clip(model.cmat - self.c * model.kmat, 0.0, None),
                                            mass=0.0)
 
     def bounds(self, maps) -> tuple[Bounds | None, str]:
         """The :class:`Bounds` of the pencil of ``maps``, or None and why not."""
-        Q = sp.csr_matrix(maps.Q)
-        if Q.shape[1] == 0:
-            return None, "not tried: no retained DOF"
-        if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
-            return None, "not tried: P̃₀ ≠ Q̃ᵀ"
-        B = (maps.P @ self.M @ Q).tocsr()
-        b = B.diagonal()
-        if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
-            return None, "not tried: B is not diagonal with positive entries"
+        b, why = diagonal_mass(maps, self.M)
+        if b is None:
+            return None, f"not tried: {why}"
         c, alpha, grow = self.c, self.alpha, 1 + ROUNDING
         _, beta = friction_discs(maps, self.K, b)
         nu, delta_plus = friction_discs(maps, self.excess, b)
@@ -135,7 +131,7 @@ def damped_flutter_free(pen) -> tuple[bool, str]:
     """``(proved, statement)``: whether every eigenvalue of the damped sliding pencil ``pen``
     has Re λ < 0 (module docstring), and the sentence saying what was shown or why not.
     Collective on the pencil's communicator (every rank computes the same bounds)."""
-    bounds, why = DampingSplit(pen.model).bounds(pen.maps)
+    bounds, why = DampingSplit(pen.lattice).bounds(pen.maps)
     if bounds is None:
         return False, why
     g = bounds.needed()
@@ -159,27 +155,30 @@ def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4)
     ``sym(A(μ)) + g·B`` is affine in μ: negative definite at 0 and at m (two inertias), it is
     so on [0, m].  Bisection on m.  ``lattice``: the SciPy
     :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction; every rank alike."""
-    pieces = DampingSplit(lattice.model)
+    pieces = DampingSplit(lattice)
 
-    def proved(m: float) -> bool:
-        bounds, _ = pieces.bounds(maps.with_friction(m))
-        g = math.inf if bounds is None else bounds.needed()
-        if not math.isfinite(g):
-            return False
-        for mu in sorted({0.0, m}):
-            pen = pencil_of(lattice, lines, (), maps=maps.with_friction(mu))
-            if pen.A is not None and not rayleigh_bound(pen.A, pen.B, -g, decisive=False).proved:
+    def negative(pen, g: float) -> bool:
+        return pen.A is None or rayleigh_bound(pen.A, pen.B, -g, decisive=False).proved
+
+    with pencil_of(lattice, lines, (), maps=maps.with_friction(0.0)) as at_zero:
+        def proved(m: float) -> bool:
+            bounds, _ = pieces.bounds(maps.with_friction(m))
+            g = math.inf if bounds is None else bounds.needed()
+            if not (math.isfinite(g) and negative(at_zero, g)):
                 return False
-        return True
+            if m == 0.0:
+                return True
+            with pencil_of(lattice, lines, (), maps=maps.with_friction(m)) as pen:
+                return negative(pen, g)
 
-    if not math.isfinite(upper) or upper <= 0 or not proved(0.0):
-        return 0.0, "the damped flutter-free proof does not hold at μ = 0"
-    lo, hi = 0.0, upper
-    if proved(hi):
-        lo = hi
-    while hi - lo > rel * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if proved(mid) else (lo, mid)
+        if not math.isfinite(upper) or upper <= 0 or not proved(0.0):
+            return 0.0, "the damped flutter-free proof does not hold at μ = 0"
+        lo, hi = 0.0, upper
+        if proved(hi):
+            lo = hi
+        while hi - lo > rel * hi:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if proved(mid) else (lo, mid)
     return lo, (f"no eigenvalue of the damped sliding pencil grows for any μ in [0, {lo:.8g}] (the damped flutter-free "
                 "proof with the bounds at its upper end, sym(A(μ)) + g·B ≺ 0 at both ends, affine in μ: a proof)")
 

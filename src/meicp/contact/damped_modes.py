@@ -70,23 +70,34 @@ def followed_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
             if not info["converged"]:
                 notes.append(f"σ = {sol.lam:.6g}: {info['why']}")
                 continue
-            res, parts, support = quadratic_certificate(ops, lam, x, J)
-            worst = max(parts, key=parts.get)
-            if lam < 0 or res > CERTIFICATE_TOL:
-                why = "λ < 0" if lam < 0 else f"{worst} {parts[worst]:.1e} > {CERTIFICATE_TOL:g}"
+            mode, why = certified_mode(ops, red, lam, x)
+            if mode is None:
                 notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} on its support, not a mode ({why})")
                 continue
             if any(abs(lam * lam - m.sigma) <= SAME * max(lam * lam, 1e-300) for m in modes):
                 notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}, a mode already found")
                 continue
-            modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=x, support=support, residual=res), red))
-            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified "
-                         f"(residual {res:.1e})")
+            modes.append(mode)
+            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} in {info['iterations']} steps, certified ({why})")
     statement = (f"{len(solutions)} undamped mode(s) followed to the damped problem on their supports "
                  f"(residual inverse iteration): {'; '.join(notes)}; {time.perf_counter() - t0:.1f} s")
     log.info("damped divergence: %s", statement)
     modes.sort(key=lambda m: -m.sigma)
     return modes, statement
+
+
+def certified_mode(ops: QuadraticPencilOps, red, lam: float, x: np.ndarray):
+    """``(mode, why)``: the :class:`~meicp.contact.result.Mode` (σ = λ²) of a real candidate
+    ``(λ, x)`` that passes the quadratic MEiCP's certificate on the whole reduced pencil
+    (λ ≥ 0, every row within :data:`CERTIFICATE_TOL`), and ``"residual …"``; or ``(None, why
+    not)``.  Collective."""
+    res, parts, support = quadratic_certificate(ops, lam, x, np.asarray(red.J, dtype=np.int64))
+    if lam < 0:
+        return None, "λ < 0"
+    if res > CERTIFICATE_TOL:
+        worst = max(parts, key=parts.get)
+        return None, f"{worst} {parts[worst]:.1e} > {CERTIFICATE_TOL:g}"
+    return mode_of(SimpleNamespace(lam=lam * lam, x=x, support=support, residual=res), red), f"residual {res:.1e}"
 
 
 def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
@@ -107,4 +118,4 @@ def _undamped_modes(pen, scene, comm, tol: float, options) -> tuple[list, str]:
                        f"{len(solutions) or 'no'} mode(s)")
 
 
-__all__ = ["followed_modes"]
+__all__ = ["certified_mode", "followed_modes"]

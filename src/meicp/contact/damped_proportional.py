@@ -28,19 +28,16 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, replace
-from types import SimpleNamespace
 
 import numpy as np
 
 from ..core.comm import mpi_comm
 from ..core.matrix import max_abs_entry
 from ..eicp.problem import lam_floor
-from ..petsc.damped_refine import quadratic_certificate
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from ..petsc.mat import distributed
-from .damped_modes import CERTIFICATE_TOL
+from .damped_modes import CERTIFICATE_TOL, certified_mode
 from .divergence.driver import divergence_of
-from .divergence.modes import mode_of
 from .divergence.verdict import DivergenceProof, DivergenceVerdict
 from .flutter_verdict import RESIDUAL_TOL, SAME, FlutterCandidate, RejectedPair
 
@@ -151,18 +148,14 @@ def _mapped_modes(pen, comm, damping: ProportionalDamping, undamped: DivergenceV
     red = pen.maps
     scales = (max_abs_entry(pen.A), max_abs_entry(pen.B))
     solutions = [s for s in getattr(undamped.eicp, "solutions", None) or [] if s.lam >= lam_floor(0.0, scales)]
-    J = np.asarray(red.J, dtype=np.int64)
     modes, notes = [], []
     with distributed(mpi_comm(comm), pen.A, pen.B, pen.damping()) as mats, QuadraticPencilOps(*mats) as ops:
         for sol in solutions:
             lam = max(damping.lam_of(float(sol.lam)), 0.0)  # 0 within rounding: ≥ 0
-            res, parts, support = quadratic_certificate(ops, lam, np.asarray(sol.x, dtype=float), J)
-            if res > CERTIFICATE_TOL:
-                worst = max(parts, key=parts.get)
-                notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}: {worst} {parts[worst]:.1e}, not certified")
-                continue
-            modes.append(mode_of(SimpleNamespace(lam=lam * lam, x=sol.x, support=support, residual=res), red))
-            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g} (residual {res:.1e})")
+            mode, why = certified_mode(ops, red, lam, np.asarray(sol.x, dtype=float))
+            notes.append(f"σ = {sol.lam:.6g} → λ = {lam:.8g}: " + (why if mode else f"{why}, not certified"))
+            if mode is not None:
+                modes.append(mode)
     modes.sort(key=lambda m: -m.sigma)
     log.info("damped divergence (proportional damping): %s", "; ".join(notes) or "no undamped mode")
     return modes, notes

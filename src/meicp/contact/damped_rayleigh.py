@@ -34,18 +34,30 @@ SLACK = 64
 def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, str]:
     """``(ν, why)`` with ``sym(D) ⪰ −ν·B`` (module docstring), or ``(None, why not)`` when B is
     not diagonal or P̃₀ is not Q̃ᵀ.  SciPy, every rank alike."""
+    b, why = diagonal_mass(maps, M)
+    if b is None:
+        return None, why
     Q = sp.csr_matrix(maps.Q)
+    gershgorin, _ = friction_discs(maps, C, b)
+    norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
+    slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
+    return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
+                                                 "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+
+
+def diagonal_mass(maps, M: sp.spmatrix) -> tuple[np.ndarray | None, str]:
+    """``(b, "")`` with B = P̃MQ̃ = diag(b), b > 0, when the damping splits as a congruence plus
+    friction rows (P̃₀ = Q̃ᵀ) and B is diagonal positive; else ``(None, why not)``."""
+    Q = sp.csr_matrix(maps.Q)
+    if Q.shape[1] == 0:
+        return None, "no retained DOF"
     if abs(sp.csr_matrix(maps.P0) - Q.T).max() != 0:
         return None, "P̃₀ ≠ Q̃ᵀ (the damping's friction-free part is not a congruence)"
     B = (maps.P @ M @ Q).tocsr()
     b = B.diagonal()
     if (B - sp.diags(b)).count_nonzero() or not np.all(b > 0):
         return None, "B is not diagonal with positive entries"
-    gershgorin, _ = friction_discs(maps, C, b)
-    norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
-    slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
-    return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
-                                                 "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+    return b, ""
 
 
 def friction_discs(maps, C: sp.spmatrix, b: np.ndarray) -> tuple[float, float]:

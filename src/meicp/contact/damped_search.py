@@ -127,19 +127,15 @@ def search_damped_flutter(pen, scene, comm=None, *, targets=None, nev: int = SEA
 
 
 def no_target(pen, why: str) -> PencilFlutter:
-    """The verdict when the damped proxy gives no target (``why``): where the proxy is proved
-    free of flutter, the damped flutter-free proof of the lattice itself
-    (:func:`~.damped_flutter_free.damped_flutter_free`: one LDLᵀ); else, or when it fails,
-    undecided.  Collective."""
-    tried = ""
-    if why == PROXY_FREE:
-        proved, statement = damped_flutter_free(pen)
-        log.info("damped flutter: %s", statement)
-        if proved:
-            return PencilFlutter(False, [], f"damped: {statement}; the damped proxy had no flutter either",
-                                 counts={"targets": 0}, growth=FlutterGrowth(0.0, 0.0, statement))
-        tried = f"; {statement}"
-    return PencilFlutter(None, [], f"damped: no target searched{why}{tried}" + search_conclusion([]),
+    """The verdict when the damped proxy gives no target — it is proved free of flutter
+    (:func:`damped_targets`, ``why``): the damped flutter-free proof of the lattice itself
+    (:func:`~.damped_flutter_free.damped_flutter_free`: one LDLᵀ), else undecided.  Collective."""
+    proved, statement = damped_flutter_free(pen)
+    log.info("damped flutter: %s", statement)
+    if proved:
+        return PencilFlutter(False, [], f"damped: {statement}; the damped proxy had no flutter either",
+                             counts={"targets": 0}, growth=FlutterGrowth(0.0, 0.0, statement))
+    return PencilFlutter(None, [], f"damped: no target searched{why}; {statement}" + search_conclusion([]),
                          counts={"targets": 0},
                          growth=search_growth([], "the damped search computes only the eigenvalues near its targets, "
                                                   "and had none"))

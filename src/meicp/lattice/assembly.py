@@ -144,12 +144,7 @@ def _bond_block(model: LatticeModel, j0: int, j1: int, dtype, kk: np.ndarray, pr
 
 def assemble_scipy(model: LatticeModel, chunk_nodes: int | None = None):
     """``(K, M)`` as SciPy CSR, built chunk by chunk into exactly allocated arrays."""
-    return stiffness_matrix_scipy(model, chunk_nodes), mass_matrix_scipy(model)
-
-
-def stiffness_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None) -> sp.csr_matrix:
-    """K alone as SciPy CSR."""
-    return _stencil_csr(model, stiffness_block, chunk_nodes)
+    return _stencil_csr(model, stiffness_block, chunk_nodes), mass_matrix_scipy(model)
 
 
 def damping_matrix_scipy(model: LatticeModel, chunk_nodes: int | None = None, *, table: np.ndarray | None = None,
