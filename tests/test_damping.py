@@ -373,6 +373,39 @@ def test_singular_damping_one_layer_without_viscosity_is_decided():
     assert r.divergence is False and r.flutter is False and r.stable is True
 
 
+#: free sides, the top held only vertically, every base node slipping: the lattice can slide as a
+#: whole at zero growth (K v = C v = 0 on the reduced DOFs), an exact λ = 0 mode
+RIGID_SLIDE = {
+    "lattice": {"nx": 3, "spacing": 1.0, "shear": 0.326},
+    "layers": [{"name": "L0", "rows": 1, "stiffness": 2.78, "density": 1.19, "viscosity": 2.78},
+               {"name": "L1", "rows": 2, "stiffness": 2.24, "density": 0.53, "viscosity": 2.24}],
+    "boundary": {"top": "fixed_y", "bottom": "contact", "left": "free", "right": "free"},
+    "contact": {"friction": 3.0, "states": "slip-"}, "damping": {"mass": 0.01}}
+
+
+def test_an_exact_zero_growth_mode_computed_below_zero_is_found_not_proved_absent(monkeypatch):
+    """The companion form puts the rigid slide's λ = 0 at about −4e-12, below the enumeration's
+    rounding floor (eps·s): it is certified at λ = 0 itself, as the proportional path (the
+    undamped MEiCP, σ = 0 within rounding) finds it."""
+    scene = scene_from_dict(RIGID_SLIDE)
+    with pencil(scene) as pen:
+        A, B, D = pen.A.toarray(), pen.B.toarray(), pen.damping().toarray()
+        J = pen.J
+    res = solve_quadratic_eicp(A, B, D, J)
+    assert res.status == "solved" and res.solutions[0].lam == 0.0 and res.solutions[0].residual <= 1e-10
+    enumerated = meicp.analyze(scene, flutter=False)
+    monkeypatch.setattr(limits, "ENUMERATE_N", 5)
+    proportional = meicp.analyze(scene, flutter=False)
+    assert "proportional" in proportional.evidence
+    assert enumerated.divergence is True is proportional.divergence
+    assert abs(enumerated.modes[0].growth_rate) <= 1e-10 and abs(proportional.modes[0].growth_rate) <= 1e-10
+    # a real λ below 0 by more than rounding is no solution, nor a doubt: Q'(λ) = Q(λ + c) has
+    # the same solutions (x, y) at λ − c, so the slide's at −c
+    c = 1e-3
+    shifted = solve_quadratic_eicp(A - c * c * B - c * D, B, D + 2 * c * B, J)
+    assert shifted.status == "no_solution", shifted.message
+
+
 def test_heavy_damping_leaves_no_flutter():
     r = meicp.analyze(damped(TWO_LAYERS, eta=(5.0, 5.0), mass=3.0))
     assert r.flutter is False and r.flutter_growth.upper == 0.0

@@ -47,6 +47,11 @@ NULL_TOL = 1e-8
 SUPPORT_TOL = 1e-9
 #: a sign-feasible candidate failing its certificate by less than this factor is unverified
 UNVERIFIED_FACTOR = 1e3
+#: a real candidate below lam_min by at most this much (relative to s) is tried at lam_min
+#: itself: an exact λ = lam_min (a rigid slide that neither K nor C resists, λ = 0) is computed
+#: off by eps·‖A‖/|yᴴDx|, unbounded as D → 0, and by √eps when it is a Jordan block (D x = 0);
+#: the certificate at lam_min decides, so a wide band costs candidates, never a false solution
+CLAMP_BAND = 1e-6
 
 
 def _norm1(M: np.ndarray) -> float:
@@ -260,6 +265,7 @@ def solve_quadratic_eicp(A, B, D, J, *, lam_min: float = 0.0, tol: float = DEFAU
     sc = Scaling.of(A, B)
     As, Bs, Ds = sc.a * A, sc.b * B, sc.d * D
     floor = lam_min - 1e3 * np.finfo(float).eps * (abs(lam_min) + sc.s)
+    band = lam_min - CLAMP_BAND * (abs(lam_min) + sc.s)
     found, unverified, visited = [], 0, 0
     for k in range(J.size + 1):
         for S in itertools.combinations(J.tolist(), k):
@@ -272,8 +278,10 @@ def solve_quadratic_eicp(A, B, D, J, *, lam_min: float = 0.0, tol: float = DEFAU
             mu = _eig(As[ix], Bs[ix], Ds[ix], vectors=False)[0]
             near = np.isfinite(mu) & (np.abs(mu.imag) <= REAL_SLACK * np.maximum(1.0, np.abs(mu)))
             for lam in _distinct(sc.s * mu[near].real):
-                if lam < floor:
+                if lam < band:
                     continue
+                if lam < floor:  # an exact λ = lam_min computed below it: certified at lam_min itself
+                    lam = lam_min
                 sols, doubt = _support_solutions(A, B, D, J, R, S, float(lam), tol)
                 found += sols
                 unverified += doubt
