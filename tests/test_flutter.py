@@ -723,3 +723,23 @@ def test_large_interface_pencils_search_the_proxy_target_for_one_eigenpair(monke
     assert f"searched at its σ for 1 eigenpair(s) with a basis of {fl.INTERFACE_NCV}" in got.evidence
     assert got.flutter is True and got.modes
     assert all(min(abs(m.sigma - r.sigma) for r in ref.modes) <= 1e-8 * abs(m.sigma) for m in got.modes)
+
+
+@pytest.mark.parametrize("scene", [
+    # a base under a lattice of 2 rows: the strip proxy has fewer rows than PROXY_NEAR_ROWS
+    {"lattice": {"nx": 6, "shear": 0.3}, "layers": [{"name": "L0", "rows": 2, "stiffness": 1.0, "density": 1.0}],
+     "boundary": {"top": "free", "bottom": "contact"}, "contact": {"friction": 2.0, "states": "slip-"}},
+    # a frictional interface under a layer of 1 row
+    {"lattice": {"nx": 5}, "layers": [{"name": "L0", "rows": 3, "stiffness": 1.0, "density": 1.0},
+                                      {"name": "L1", "rows": 1, "stiffness": 1.0, "density": 1.0}],
+     "boundary": {"top": "fixed", "bottom": "free", "left": "fixed", "right": "free"},
+     "interfaces": [{"below": "L0", "kind": "frictional", "friction": 1.83,
+                     "states": ["stick", "stick", "stick", "stick", "slip-"]}]},
+], ids=["base-2-rows", "interface-1-row-above"])
+def test_the_search_on_a_lattice_shallower_than_the_proxys_near_rows(scene):
+    """The proxy's rows next to the contact are cut to the rows it has (an IndexError before,
+    at default settings on a 2-row, 900-column lattice)."""
+    sc = scene_from_dict(scene)
+    dense, searched = meicp.analyze(sc), meicp.analyze(sc, flutter_dense_max=4)
+    assert dense.flutter is True and searched.flutter is True
+    assert searched.flutter_growth.lower <= dense.flutter_growth.upper * (1 + 1e-9)

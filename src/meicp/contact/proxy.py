@@ -113,7 +113,8 @@ def proxy_of(scene, lines, *, whole_depth: bool = False):
     base = next((line for line in lines if line.name == BASE), None)
     if base is not None:
         rows = scene.ny if whole_depth else PROXY_ROWS
-        return strip_proxy(scene, list(base.states), rows), np.arange(PROXY_NEAR_ROWS)
+        proxy = strip_proxy(scene, list(base.states), rows)
+        return proxy, (None if proxy is None else np.arange(min(PROXY_NEAR_ROWS, proxy.ny)))
     if len(sliding) != 1:
         return None, None
     proxy = interface_proxy(scene, sliding[0], scene.ny if whole_depth else PROXY_ROWS // 2)
@@ -121,7 +122,8 @@ def proxy_of(scene, lines, *, whole_depth: bool = False):
         return None, None
     index = next(i.index for i in proxy.interfaces if i.kind == "frictional")
     top_of_lower = sum(layer.rows for layer in proxy.layers[:index + 1])
-    return proxy, np.arange(top_of_lower - PROXY_NEAR_ROWS + 1, top_of_lower + PROXY_NEAR_ROWS - 1)
+    # a shallow scene's strip may have fewer rows on either side than PROXY_NEAR_ROWS
+    return proxy, np.arange(max(top_of_lower - PROXY_NEAR_ROWS + 1, 0), min(top_of_lower + PROXY_NEAR_ROWS - 1, proxy.ny))
 
 
 #: a proxy's real σ counts as above 0 beyond this multiple of max|A|/max|B| (a free lattice's
