@@ -18,7 +18,9 @@ from meicp.contact.problem import pencil
 from meicp.contact import proxy
 from meicp.contact.lines import contact_lines
 from meicp.contact.result import InstabilityResult
+from meicp.core import limits
 from meicp.examples import two_layer_scene
+from meicp.io.scene import scene_from_dict
 from meicp.lattice.model import LatticeModel
 
 from .helpers import interface_chain_scene
@@ -386,3 +388,19 @@ def test_why_no_sigma_max_was_certified():
         "(largest -1e-05; the top lies among the slow vibrations, where Lanczos stalls)")
     missed = sigma_window.TopEstimate(True, 2.5, True, 1.0, True)
     assert sigma_window.no_sigma_max(missed) == "no σ_max certified above the estimate 2.5 of λ_max(sym A, sym B)"
+
+
+def test_a_pencil_with_no_stiffness_past_the_enumeration_is_undecided_not_a_crash(monkeypatch):
+    """Every retained DOF a mechanism (A = 0): MUMPS factors no zero matrix, so its inertia is
+    read without one (PETSc error 73 before)."""
+    scene = scene_from_dict({
+        "lattice": {"nx": 3}, "layers": [{"name": "L0", "rows": 1, "stiffness": 5.8, "density": 1.2},
+                                         {"name": "L1", "rows": 1, "stiffness": 1.24, "density": 1.8}],
+        "boundary": {"top": "fixed_x", "bottom": "fixed", "left": "free", "right": "free"},
+        "interfaces": [{"below": "L0", "kind": "frictional", "friction": 1.0,
+                        "states": ["slip+", "separated", "separated"]}]})
+    with pencil(scene) as pen:
+        assert not pen.A.toarray().any()
+    assert meicp.analyze(scene, flutter=False).divergence is True  # σ = 0, enumerated
+    monkeypatch.setattr(limits, "ENUMERATE_N", 0)
+    assert meicp.analyze(scene, flutter=False).divergence is not False

@@ -49,6 +49,9 @@ PORD_FROM = 100_000
 def inertia(A) -> tuple[int, int, int]:
     """``(negative, zero, positive)`` eigenvalue counts of the symmetric PETSc matrix A."""
     PETSc = import_petsc()
+    n = A.getSize()[0]
+    if A.norm(PETSc.NormType.INFINITY) == 0.0:  # MUMPS factors no zero matrix (a mechanism's pencil)
+        return 0, n, 0
     ksp = PETSc.KSP().create(comm=A.getComm())
     try:
         ksp.setOperators(A)
