@@ -19,6 +19,7 @@ from meicp.contact.problem import pencil
 from meicp.contact.result import growth_frequency
 from meicp.core import limits
 from meicp.core.errors import ProblemError
+from meicp.examples import two_layer_scene
 from meicp.io.scene import scene_from_dict
 from meicp.core.matrix import to_dense
 
@@ -515,7 +516,6 @@ def test_no_flutter_flag_takes_no_value():
 def test_search_without_a_proxy_on_a_frictional_interface_over_a_rough_base():
     """Two sliding contact lines (a rough base and a frictional interface): no strip proxy,
     λ-line targets; what it certifies is QZ's."""
-    from meicp.examples import two_layer_scene
     scene = two_layer_scene(24, (3, 3), mu=1.0, interface={"kind": "frictional", "friction": 0.5,
                                                             "states": "slip+"})
     with pencil(scene) as pen:
@@ -609,7 +609,6 @@ def test_a_loose_solve_whose_pairs_fail_the_gate_is_made_again_strictly(shifted_
 
 
 def _interface_scene(nx, rows, mu, states="slip+"):
-    from meicp.examples import two_layer_scene
     return two_layer_scene(nx, rows, bottom="fixed", stiffness=(1.0, 6.0),
                            interface={"kind": "frictional", "friction": mu, "states": states})
 
@@ -701,7 +700,6 @@ def test_interface_proxy_is_cut_where_the_interface_slides():
     assert proxy.boundary.bottom == "fixed" and proxy.boundary.top == "fixed"
     itf, = (i for i in proxy.interfaces if i.kind == "frictional")
     assert itf.index == 0 and itf.states.count("slip-") == 30 and len(itf.states) == strip.PROXY_NX
-    from meicp.examples import two_layer_scene
     based = two_layer_scene(100, (6, 7), mu=1.0, interface={"kind": "frictional", "friction": 0.5, "states": states})
     lines = contact_lines(based, LatticeModel(based))
     assert strip.interface_proxy(based, lines[1]) is None
@@ -743,3 +741,12 @@ def test_the_search_on_a_lattice_shallower_than_the_proxys_near_rows(scene):
     dense, searched = meicp.analyze(sc), meicp.analyze(sc, flutter_dense_max=4)
     assert dense.flutter is True and searched.flutter is True
     assert searched.flutter_growth.lower <= dense.flutter_growth.upper * (1 + 1e-9)
+
+
+def test_a_search_slepc_cannot_solve_is_undecided_not_a_crash():
+    """Stiffness 1e-300 (a legal scene): SLEPc's projected problem fails in LAPACK (PETSc
+    error 76); the target counts as failed and the evidence names it."""
+    scene = two_layer_scene(5, (2, 2), mu=0.65, stiffness=(1e-300, 5e-300), states="slip+")
+    assert meicp.analyze(scene).flutter is True  # dense
+    r = meicp.analyze(scene, flutter_dense_max=4)
+    assert r.flutter is None and "failed (PETSc error" in r.flutter_evidence

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core import limits
 from ..core.comm import mpi_comm
+from ..core.errors import ConvergenceError
 from ..core.matrix import to_dense
 from ..core.validation import as_flag
 from ..petsc.flutter import SlidingPencilOps, complex_shift_solve
@@ -124,16 +125,20 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                                                  "a proof", growth=NO_FLUTTER)
         bound = ops.skew_bound()
         real_max, real_how = _real_part_bound(ops, real_bound) if bound is not None else (None, "")
-        modes, rejected, disks, borderline, moved, real_ritz = [], [], [], 0, [], 0
+        modes, rejected, disks, borderline, moved, real_ritz, failed = [], [], [], 0, [], 0, []
         for tau in targets:
             tau = complex(tau)
             tau = tau.conjugate() if tau.imag < 0 else tau
             for attempt in range(off_cluster_tries + 1):
                 last = attempt == off_cluster_tries
                 basis = ncv if attempt == 0 else max(ncv or 0, RETRY_NCV)
-                pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=basis, tol=tol, low_rank=low_rank,
-                                                  max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
-                                                  options=options, gate=residual_tol, strict_tol=strict_tol)
+                try:
+                    pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=basis, tol=tol, low_rank=low_rank,
+                                                      max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
+                                                      options=options, gate=residual_tol, strict_tol=strict_tol)
+                except ConvergenceError as err:  # the same on every rank: the solve is collective
+                    failed.append(str(err))
+                    break
                 passed = sum(res <= residual_tol for _, _, res in pairs)
                 real_ritz += info.get("real_ritz", 0)
                 disks.append((tau, info["radius"], len(pairs), passed, info["iterations"]))
@@ -169,7 +174,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     f"converged in {text}"
                     + (f"; |Im σ| ≤ {bound:.4g} everywhere (skew-part bound)" if bound is not None else "")
                     + (f"; {len(rejected)} pair(s) failed the residual gate {residual_tol:g}" if rejected else "")
-                    + real_ritz_note(real_ritz, "σ − τ"))
+                    + real_ritz_note(real_ritz, "σ − τ")
+                    + "".join(f"; {why}" for why in failed))
     evidence += search_conclusion(modes)
     rectangle = None if bound is None or real_max is None else (real_max, bound, real_how)
     growth = search_growth(modes, "shift-and-invert computes only the eigenvalues near its targets", rectangle)

@@ -28,6 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..core.comm import mpi_comm
+from ..core.errors import ConvergenceError
 from . import import_petsc, import_slepc, mumps_c
 from .mat import mat_from_local_csr, vec_to_numpy
 from .options import FLUTTER, OptionsScope, mumps_controls, st_low_rank, st_node_pairs
@@ -326,8 +327,12 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 K.setUp()
                 eps.setOperators(K)
             scope.configure(eps)  # setFromOptions, last
-            pairs, info = solve_tightened(eps, lambda: _converged_pairs(eps, ops, tau, real_form, B2), B2, gate,
-                                          strict_tol, vectors, pseudo=lambda pairs: following(pairs, tau))
+            try:
+                pairs, info = solve_tightened(eps, lambda: _converged_pairs(eps, ops, tau, real_form, B2), B2, gate,
+                                              strict_tol, vectors, pseudo=lambda pairs: following(pairs, tau))
+            except PETSc.Error as err:  # e.g. LAPACK on a projected problem of entries near 1e-300
+                raise ConvergenceError(f"SLEPc's shift-and-invert at τ = {tau:.6g} failed (PETSc error "
+                                       f"{err.ierr})") from err
         info["seconds"] = time.perf_counter() - t0
         return pairs, info
     finally:
