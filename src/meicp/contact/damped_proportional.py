@@ -89,10 +89,7 @@ def growing_root(damping: ProportionalDamping, sigma: complex) -> complex:
 def bonded_pairs(model) -> tuple[np.ndarray, np.ndarray]:
     """``(k, η)`` of every pair of materials some bond of the lattice joins (the bonds a
     frictional interface cuts do not count): the coefficients C and K are assembled from."""
-    nm = len(model.materials)
-    codes = (np.arange(nm)[:, None] * nm + np.arange(nm)[None, :] + 1).astype(float)
-    used = np.unique(model.neighbour_stiffness(0, model.ny, codes))
-    pairs = [divmod(int(code) - 1, nm) for code in used if code > 0]
+    pairs = model.bonded_materials
     return (np.array([model.kmat[a, b] for a, b in pairs], dtype=float),
             np.array([model.cmat[a, b] for a, b in pairs], dtype=float))
 
