@@ -14,6 +14,7 @@ from meicp.contact.problem import pencil
 from meicp.core import limits
 from meicp.eicp.quadratic import quadratic_spectrum
 from meicp.examples import two_layer_scene
+from meicp.io.scene import scene_from_dict
 
 from .test_damping import damped
 
@@ -265,3 +266,43 @@ def test_a_rigid_slide_the_damping_does_not_reach_gives_no_flutter_mode():
     assert meicp.analyze(scene).flutter is None
     r = meicp.analyze(scene, flutter_dense_max=10)
     assert r.flutter is None and not r.flutter_modes
+
+
+def test_a_real_eigenvalue_computed_off_the_axis_is_no_flutter_mode(monkeypatch):
+    """Dashpots of η = 1e3 / 1e5 / 1: the companion search converged the real eigenvalue
+    λ = 0.0045294566 (50 digits: Im 6e-46) as three values 2e-9 … 2e-8 off the axis, which a
+    margin over ‖Q'(λ)‖ (huge here) certified as flutter.  Their eigenvectors are nearly real:
+    the conjugate pair's condition bound rejects them."""
+    scene = scene_from_dict({
+        "lattice": {"nx": 2, "shear": 0.4247565318883201},
+        "layers": [{"name": "L0", "rows": 2, "stiffness": 1.4903099700333364, "density": 1.3654134593500704,
+                    "viscosity": 1000.0},
+                   {"name": "L1", "rows": 1, "stiffness": 1.448826615902407, "density": 1.2080179184842506,
+                    "viscosity": 100000.0},
+                   {"name": "L2", "rows": 1, "stiffness": 3.4555784023531877, "density": 0.7382311136070208,
+                    "viscosity": 1.0}],
+        "boundary": {"top": "fixed_x", "bottom": "contact", "left": "fixed_y", "right": "free"},
+        "contact": {"friction": 5.0, "states": "slip+"},
+        "interfaces": [{"below": "L1", "kind": "frictional", "friction": 0.5, "states": "slip+"}]})
+    r = meicp.analyze(scene, flutter_dense_max=0)
+    assert r.flutter is not True and not r.flutter_modes
+    assert meicp.analyze(scene).flutter is not True  # the dense path agrees
+
+
+def test_a_double_eigenvalue_on_the_imaginary_axis_is_no_flutter_mode(monkeypatch):
+    """At interface μ = 2 exactly a damped branch crosses Re λ = 0 where it meets an undamped
+    mode: a double eigenvalue ±1.6e-9 + 1.1011i in rounding (0 in exact arithmetic); the search
+    certified λ = 5e-9 + 1.1011i.  The partner pair's condition bound (their eigenvectors
+    nearly parallel) rejects it."""
+    scene = scene_from_dict({
+        "lattice": {"nx": 2},
+        "layers": [{"name": "L0", "rows": 2, "stiffness": 4.9623258741477505, "density": 1.557285180121884},
+                   {"name": "L1", "rows": 2, "stiffness": 1.8155394920065286, "density": 1.2830415859607371,
+                    "viscosity": 10.0},
+                   {"name": "L2", "rows": 2, "stiffness": 0.5405974571202203, "density": 0.8917580235114427}],
+        "boundary": {"top": "free", "bottom": "contact", "left": "free", "right": "fixed_y"},
+        "contact": {"friction": 2.0, "states": "slip+"},
+        "interfaces": [{"below": "L1", "kind": "frictional", "friction": 2.0, "states": "slip-"}]})
+    monkeypatch.setattr(limits, "ENUMERATE_N", 0)
+    r = meicp.analyze(scene, flutter_dense_max=0)
+    assert all(np.sqrt(complex(m.sigma)).real > 1e-6 for m in r.flutter_modes), r.flutter_modes

@@ -750,3 +750,18 @@ def test_a_search_slepc_cannot_solve_is_undecided_not_a_crash():
     assert meicp.analyze(scene).flutter is True  # dense
     r = meicp.analyze(scene, flutter_dense_max=4)
     assert r.flutter is None and "failed (PETSc error" in r.flutter_evidence
+
+
+@pytest.mark.parametrize("target, mu", [(-2.2475, 0.6307632479061257), (-6.2475, 0.6307632479061257),
+                                        (-6.2475, 0.6307632479061327)])
+def test_a_split_pair_of_real_eigenvalues_is_no_flutter_mode(target, mu):
+    """two_layers.toml's lattice scaled so that its onset collision σ* = −4.3195·s lies on a
+    target of the search, μ within 1e-14 of it: every eigenvalue is real (40 digits), two of
+    them 2.5e-9 apart; the search converged them as σ ± 6e-10i and certified them under
+    MARGIN·η alone.  Their eigenvectors are nearly real (ρ ≈ 1e-8, every true mode measured
+    ≥ 0.03): the conjugate pair's condition bound rejects them; the dense path agrees."""
+    s = target / -4.3195068494
+    scene = two_layer_scene(5, (2, 2), mu=mu, stiffness=(1.0 * s, 5.0 * s), states="slip+")
+    r = meicp.analyze(scene, flutter_dense_max=4)
+    assert r.flutter is not True and not r.flutter_modes
+    assert meicp.analyze(scene).flutter is not True

@@ -164,7 +164,7 @@ def mapped_flutter(ops, damping: ProportionalDamping, candidates, margin) -> tup
     each σ gives λ = :func:`growing_root`, with x an eigenvector of Q(λ) = (1 + cλ)(σ(λ)B − A).
     ``(modes, rejected, damped_out)``: FlutterCandidates with σ = λ² whose backward error on
     Q itself (``ops``: :class:`~meicp.petsc.flutter_quadratic.QuadraticPencilOps`) passes the
-    residual gate and whose Re λ and Im λ exceed ``margin(λ, residual)``; RejectedPairs; and
+    residual gate and whose Re λ and Im λ exceed ``margin(λ, residual, x)``; RejectedPairs; and
     how many grow no faster than their margin (the damping holds them).  Collective."""
     lo, hi = ops.A.getOwnershipRange()
     modes, rejected, damped_out = [], [], 0
@@ -173,7 +173,7 @@ def mapped_flutter(ops, damping: ProportionalDamping, candidates, margin) -> tup
         if lam.imag < 0:  # the conjugate pair: its eigenvector conjugated
             lam, x = lam.conjugate(), x.conjugate()
         res = ops.residual(lam, x[lo:hi])
-        r = margin(lam, res)
+        r = margin(lam, res, x)
         if res > RESIDUAL_TOL:
             rejected.append(RejectedPair(lam * lam, res))
         elif any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):

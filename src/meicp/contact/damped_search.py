@@ -8,7 +8,8 @@ A pair counts as a flutter mode when its backward error on Q is at most
 :data:`~.flutter_verdict.RESIDUAL_TOL` and both Re λ and |Im λ| exceed the margin
 ``MARGIN·η·(|λ|²‖B‖ + |λ|‖D‖ + ‖A‖)/(2|λ|‖B‖ + ‖D‖)`` — the first-order change of λ under a
 backward error η (‖Q'(λ)‖ ≈ 2|λ|‖B‖ + ‖D‖), with the searches' :data:`~.flutter_verdict.MARGIN`
-standing for the unknown condition number (with D = 0 it is that search's σ-margin over 2|λ|).
+standing for the unknown condition number (with D = 0 it is that search's σ-margin over 2|λ|),
+raised where the eigenvector is nearly real (:func:`lambda_margin`).
 Like the undamped search it proves flutter, never its absence; the growth bracket has the
 fastest certified mode below and a proved but loose ceiling above (:func:`growth_ceiling`,
 Bendixson's rectangle carried over to the quadratic pencil).  Collective.
@@ -31,7 +32,7 @@ from .flutter_growth import FlutterGrowth, quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             depth_note, depth_used, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
-                             memory_refusal, real_ritz_note, search_conclusion)
+                             memory_refusal, partner_condition, real_ritz_note, search_conclusion)
 from .lines import BASE
 from .on_root import on_root
 from .proxy import PROXY_NX, PROXY_ROWS
@@ -51,10 +52,21 @@ GIVE_UP_RESTARTS = 10
 GIVE_UP_BUDGET = 60
 
 
-def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float) -> float:
-    """How far λ may be from the exact eigenvalue (module docstring)."""
+def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float, x, partners=()) -> float:
+    """How far λ (eigenvector x) may be from the exact eigenvalue (module docstring): MARGIN·η·
+    scale(λ) times the larger lower bound of its condition number ‖x‖‖y‖/|yᴴQ'(λ)x|, 1/‖Q'(λ)‖
+    or :func:`~.flutter_verdict.partner_condition`'s from the conjugate pair and the other
+    pairs ``partners`` ((λ₂, x₂)) — a search once certified three "modes" within 2e-8 of a real
+    λ = 0.0045 under dashpots of η = 1e5, and one at Re λ = 5e-9 of a double eigenvalue on the
+    imaginary axis."""
     _, norm_B, norm_D = ops.norms
-    return MARGIN * residual * ops.scale(lam) / max(2 * abs(lam) * norm_B + norm_D, np.finfo(float).tiny)
+    tiny = np.finfo(float).tiny
+
+    def spread(l1, l2):
+        return abs(l1 + l2) * norm_B + norm_D, abs(l1 - l2) * norm_B
+
+    kappa = max(1.0 / max(2 * abs(lam) * norm_B + norm_D, tiny), partner_condition(lam, x, partners, spread))
+    return MARGIN * residual * ops.scale(lam) * kappa
 
 
 def zero_reach(ops: QuadraticPencilOps, residual: float) -> float:
@@ -177,7 +189,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
             real_ritz += info.get("real_ritz", 0)
             disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"], info["gave_up"]))
             for lam, x, res in pairs:
-                r = lambda_margin(ops, lam, res)
+                r = lambda_margin(ops, lam, res, x, [(l2, x2) for l2, x2, _ in pairs if l2 != lam])
                 if res > RESIDUAL_TOL:
                     rejected.append(RejectedPair(lam * lam, res))
                 elif lam.imag > r and lam.real > r and abs(lam) > zero_reach(ops, res):

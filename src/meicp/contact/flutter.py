@@ -46,7 +46,8 @@ from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             SEARCH_TARGETS, depth_note, depth_used, off_cluster, proxy_targets)
 from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, FlutterVerdict, PencilFlutter,
-                             RejectedPair, memory_refusal, real_ritz_note, search_conclusion)
+                             RejectedPair, memory_refusal, partner_condition, real_ritz_note,
+                             search_conclusion)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
@@ -143,7 +144,9 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                 real_ritz += info.get("real_ritz", 0)
                 disks.append((tau, info["radius"], len(pairs), passed, info["iterations"]))
                 for sigma, x, res in pairs:
-                    margin = MARGIN * res * (ops.norm_A / ops.norm_B + abs(sigma))
+                    others = [(s2, x2) for s2, x2, _ in pairs if s2 != sigma]
+                    kappa = max(1.0, partner_condition(sigma, x, others, lambda s1, s2: (1.0, 0.0)))
+                    margin = MARGIN * kappa * res * (ops.norm_A / ops.norm_B + abs(sigma))
                     if res > residual_tol:
                         rejected.append(RejectedPair(sigma, res))
                     elif abs(sigma.imag) > margin:
@@ -317,7 +320,7 @@ def proportional_search(pen, scene, comm, damping, options, search: dict) -> Pen
             + _large_settings(n, pen.lines, search, proxy=True, moved=True))
     undamped = search_flutter(pen.A, pen.B, targets, comm, options=options, why_targets=why, **search)
     with distributed(comm, pen.A, pen.B, pen.damping()) as mats, QuadraticPencilOps(*mats) as ops:
-        modes, rejected, held = mapped_flutter(ops, damping, undamped.modes, lambda lam, res: lambda_margin(ops, lam, res))
+        modes, rejected, held = mapped_flutter(ops, damping, undamped.modes, lambda lam, res, x: lambda_margin(ops, lam, res, x))
         ceiling = growth_ceiling(ops)
     evidence = (f"damped, {damping.describe()}: every eigenvalue λ of λ²B + λD − A solves λ² + (α − cσ)λ − σ = 0 at "
                 f"an eigenvalue σ of (A, B), so the undamped search ran — "

@@ -15,10 +15,41 @@ from .flutter_growth import FlutterGrowth
 RESIDUAL_TOL = 1e-10
 #: the searches past the dense limit: a value must stand off the real axis by MARGIN·η times the
 #: pencil's scale (η the backward error) to count as non-real; MARGIN stands for the unknown
-#: condition number (κ ≤ 1.1e3 measured on the dense cases); the undamped and the damped alike
+#: condition number (κ ≤ 1.1e3 measured on the dense cases) times :func:`partner_condition`, a
+#: lower bound of it that a near-defective pair makes large; the undamped and the damped alike
 MARGIN = 1e6
 #: the searches: a value within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
+
+
+def separation(x1, x2) -> float:
+    """θ = min over φ of ‖x₁/‖x₁‖ − e^{iφ}x₂/‖x₂‖‖ = √(2 − 2|x₁ᴴx₂|/(‖x₁‖‖x₂‖)): 0 for parallel vectors."""
+    x1, x2 = np.asarray(x1), np.asarray(x2)
+    norms = float(np.linalg.norm(x1) * np.linalg.norm(x2))
+    cos = abs(complex(np.vdot(x1, x2))) / norms if norms > 0 else 1.0
+    return float(np.sqrt(max(2.0 - 2.0 * cos, 0.0)))
+
+
+def partner_condition(value: complex, x, partners, spread) -> float:
+    """A lower bound of the condition number ‖x‖‖y‖/|yᴴQ'(value)x| of an eigenvalue (right
+    eigenvector x, left y) from other eigenpairs ``partners`` — (value₂, x₂), the conjugate
+    (value̅, x̄) of a real pencil always among them.  For value₂ ≠ value the left vector y
+    annihilates (Q(value) − Q(value₂))x₂ = (value − value₂)·W x₂, so with x₂ turned to the
+    phase nearest x, |yᴴQ'x| = |yᴴ(W(x − x₂) + (Q' − W)x)| ≤ ‖y‖‖x‖·(a·θ + b), θ =
+    :func:`separation`, ``spread(value, value₂) = (a, b)`` bounding ‖W‖ and ‖Q' − W‖ (σB − A:
+    W = Q' = B, so (‖B‖, 0); λ²B + λD − A: W = (λ + λ₂)B + D, Q' − W = (λ − λ₂)B).  Large where two
+    eigenvalues nearly coalesce — their eigenvectors nearly parallel — or a real one was
+    computed off the axis (x nearly real, θ to x̄ small): ρ ≈ 1e-8 where a search certified
+    such "modes", θ ≥ 0.06 for every true flutter mode measured, even just past the onset.
+    The searches' margins take MARGIN times this bound where it exceeds their own."""
+    x = np.asarray(x)
+    worst = np.inf
+    for value2, x2 in [(complex(value).conjugate(), x.conjugate()), *partners]:
+        if value2 == value and x2 is x:
+            continue
+        a, b = spread(complex(value), complex(value2))
+        worst = min(worst, a * separation(x, x2) + b)
+    return 1.0 / worst if worst > 0 else np.inf
 
 
 @dataclass(frozen=True)
