@@ -20,9 +20,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import meicp
 from meicp.contact.result import InstabilityResult, Mode
+from meicp.core import limits
+from meicp.core.json_values import json_ready, restore_infinities
 from meicp.core.errors import ProblemError
 from meicp.io.results import CODE_LEGEND, FILES, STATE_CODES, scene_to_toml, write_results
+from meicp.examples import two_layer_scene
 from meicp.io.scene import load_scene, loads_scene
 from meicp.plotting.lattice import display_scale
 
@@ -476,3 +480,18 @@ def test_solve_cli_exit_codes(tmp_path, capsys, fake_analyze):
     with pytest.raises(ProblemError, match="lattice.columns"):
         solve.run(solve_args(str(bad), "-o", str(tmp_path / "b")))
     assert len(calls) == n and not (tmp_path / "b").exists()  # failed before any analysis
+
+
+def test_a_proof_with_an_infinite_sigma_window_reads_back(tmp_path, monkeypatch):
+    """Format 2 writes an infinite end as null with a ``sigma_window_infinite`` flag;
+    ``load_results`` gave it to DivergenceProof as a keyword (a TypeError on every results.h5
+    of a Rayleigh proof at scale) and read the end as NaN."""
+    doc = {"w": (0.0, float("inf")), "m": float("-inf"), "k": 1.0}
+    assert restore_infinities(json_ready(doc)) == {"w": [0.0, float("inf")], "m": float("-inf"), "k": 1.0}
+    monkeypatch.setattr(limits, "ENUMERATE_N", 0)
+    scene = two_layer_scene(6, (2, 2), mu=0.3, states="slip-")
+    result = meicp.analyze(scene, flutter=False)
+    assert result.proofs[0].sigma_window == (0.0, float("inf"))
+    files = write_results(tmp_path / "s", scene, result, plots=False)
+    back = meicp.load_results(files["results"])
+    assert back.proofs[0].sigma_window == (0.0, float("inf")) and back.divergence is False

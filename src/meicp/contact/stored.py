@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.json_values import restore_infinities
 from ..eicp.problem import EiCPResult
 from .critical_friction.result import CriticalFriction, Onset
 from .damped import DampingUsed
@@ -63,8 +64,9 @@ def result_from_record(record: dict) -> InstabilityResult:
 
 def proof_from_dict(data: dict) -> DivergenceProof:
     """A :class:`DivergenceProof` from its ``to_dict()`` as JSON stored it (an infinite end
-    of the σ-window as the string "inf", an unknown one as null)."""
-    d = dict(data)
+    of the σ-window as null with a ``sigma_window_infinite`` flag, format 2, or as the string
+    "inf", format 1; an unknown one as null)."""
+    d = restore_infinities(dict(data))
     if d.get("sigma_window") is not None:
         d["sigma_window"] = tuple(_number(v) for v in d["sigma_window"])
     for name in ("margin", "stable_friction_scale"):

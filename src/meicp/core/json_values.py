@@ -72,3 +72,19 @@ def json_ready(value):
         value = float(value)
         return value if math.isfinite(value) else None
     return value
+
+
+def restore_infinities(doc: dict) -> dict:
+    """The inverse of :func:`json_ready` on one dict level: each ``<key>_infinite`` flag
+    removed and its ±∞ put back in ``<key>`` (a number, or the flagged items of a list)."""
+    out = {k: v for k, v in doc.items() if not k.endswith(INFINITE_SUFFIX)}
+    for key, flag in doc.items():
+        if not key.endswith(INFINITE_SUFFIX):
+            continue
+        name = key[:-len(INFINITE_SUFFIX)]
+        if isinstance(flag, list):
+            out[name] = [math.copysign(math.inf, f) if f else v for v, f in zip(out[name], flag)]
+        elif flag:
+            out[name] = math.copysign(math.inf, flag)
+    return out
+
