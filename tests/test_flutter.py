@@ -765,3 +765,21 @@ def test_a_split_pair_of_real_eigenvalues_is_no_flutter_mode(target, mu):
     r = meicp.analyze(scene, flutter_dense_max=4)
     assert r.flutter is not True and not r.flutter_modes
     assert meicp.analyze(scene).flutter is not True
+
+
+def test_the_undamped_search_stops_a_stalled_solve():
+    """The undamped search's stopping test (a speed heuristic, the stall half of the damped
+    search's): a target whose best estimate stays at 1.5e-2 (μ = 0.002 on a 10⁵-DOF lattice:
+    2.7 s a restart, toward 500) stops after its restarts; a converging one goes on."""
+    from meicp.petsc import import_slepc
+    from meicp.petsc.flutter import StallWatch
+
+    reason = import_slepc().EPS.ConvergedReason
+    stuck, converging = StallWatch(10, 60, 1e-8), StallWatch(10, 60, 1e-8)
+    for its in range(1, 11):
+        stuck.monitor(None, its, 0, [0.5j] * 8, [1.5e-2 * (1 + 0.1 * (its % 2))] * 8)
+        converging.monitor(None, its, 0, [0.5j] * 8, [1e-1 * 0.5 ** its] * 8)
+        if its < 10:  # never before its restarts
+            assert stuck.stopping(None, its + 1, 500, 0, 8) == reason.ITERATING
+    assert stuck.stopping(None, 11, 500, 0, 8) == reason.DIVERGED_ITS and "too slowly" in stuck.gave_up
+    assert converging.stopping(None, 11, 500, 0, 8) == reason.ITERATING and not converging.gave_up

@@ -46,8 +46,10 @@ SEARCH_NEV = 2
 SEARCH_NCV = 12
 #: restarts after which a solve stops when its Ritz values show nothing growing (Re λ < 0), or
 #: when its error estimates, falling as they did, would not reach the tolerance within
-#: GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`): a speed
-#: heuristic, the target then counts as failed (undecided)
+#: GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`; the undamped
+#: search the latter only, :class:`~meicp.petsc.flutter.StallWatch`: at μ = 0.002 on a 10⁵-DOF
+#: lattice its last target ran on toward 500 restarts of 2.7 s, the estimate stuck at 1.5e-2): a
+#: speed heuristic, the target then counts as failed (undecided)
 GIVE_UP_RESTARTS = 10
 GIVE_UP_BUDGET = 60
 

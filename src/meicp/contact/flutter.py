@@ -40,7 +40,8 @@ from ..petsc.mat import distributed
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from .damped import damped_flutter
 from .damped_proportional import mapped_flutter, proportional_damping
-from .damped_search import damped_targets, growth_ceiling, lambda_margin, no_target, search_damped_flutter
+from .damped_search import (GIVE_UP_BUDGET, GIVE_UP_RESTARTS, damped_targets, growth_ceiling, lambda_margin,
+                            no_target, search_damped_flutter)
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
@@ -136,13 +137,17 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                 try:
                     pairs, info = complex_shift_solve(ops, tau, nev=nev, ncv=basis, tol=tol, low_rank=low_rank,
                                                       max_it=LAST_RESTARTS if last else SEARCH_RESTARTS,
-                                                      options=options, gate=residual_tol, strict_tol=strict_tol)
+                                                      options=options, gate=residual_tol, strict_tol=strict_tol,
+                                                      give_up=(GIVE_UP_RESTARTS, GIVE_UP_BUDGET))
                 except ConvergenceError as err:  # the same on every rank: the solve is collective
                     failed.append(str(err))
                     break
                 passed = sum(res <= residual_tol for _, _, res in pairs)
                 real_ritz += info.get("real_ritz", 0)
                 disks.append((tau, info["radius"], len(pairs), passed, info["iterations"]))
+                if info.get("gave_up"):
+                    failed.append(f"the solve at τ = {tau:.6g} was stopped after {info['iterations']} restarts, "
+                                  f"{info['gave_up']}")
                 for sigma, x, res in pairs:
                     others = [(s2, x2) for s2, x2, _ in pairs if s2 != sigma]
                     kappa = max(1.0, partner_condition(sigma, x, others, lambda s1, s2: (1.0, 0.0)))

@@ -272,10 +272,62 @@ class _ComplexInverse:
             self.work = None
 
 
+class StallWatch:
+    """A stopping test for the flutter searches, a speed heuristic: after ``restarts``
+    Krylov–Schur restarts the solve ends as if out of iterations when the best error estimate
+    of the unconverged Ritz values, falling geometrically as it did since the first restart,
+    would not reach ``tol`` within ``budget`` restarts in all.  The caller counts a stopped
+    solve as not converged, which proves nothing.  Reads the monitor's estimates (one restart
+    late); ``gave_up``: why it stopped the solve ("" when it did not).  :meth:`attach` puts it
+    on an EPS."""
+
+    def __init__(self, restarts: int, budget: int, tol: float):
+        self.restarts, self.budget, self.tol = int(restarts), int(budget), float(tol)
+        self.seen, self.errors, self.gave_up = -1, {}, ""
+
+    def attach(self, eps) -> "StallWatch":
+        eps.setMonitor(self.monitor)
+        eps.setStoppingTest(self.stopping)
+        return self
+
+    def monitor(self, _eps, its, nconv, eig, err) -> None:
+        self.seen = its
+        # the estimates of the pairs still wanted, as the progress monitor reads them (SLEPc
+        # sorts the converged first; 0 is "not estimated yet")
+        wanted = _eps.getDimensions()[0] if _eps is not None else len(err)
+        left = np.asarray(err, dtype=float)[nconv:max(wanted, nconv + 1)]
+        left = left[left > 0]
+        if left.size:
+            self.errors[its] = float(left.min())
+
+    def _too_slow(self, its: int) -> bool:
+        first, now = self.errors.get(1), self.errors.get(its)
+        if not first or not now or now <= self.tol or its <= 1:
+            return False
+        rate = (now / first) ** (1.0 / (its - 1))
+        return rate >= 1.0 or its + np.log(self.tol / now) / np.log(rate) > self.budget
+
+    def why_stop(self, its: int) -> str:
+        return (f"converging too slowly to reach the tolerance within {self.budget} restarts"
+                if self._too_slow(its) else "")
+
+    def stopping(self, _eps, its, max_it, nconv, nev):
+        reason = import_slepc().EPS.ConvergedReason
+        if nconv >= nev:
+            return reason.CONVERGED_TOL
+        if its >= max_it:
+            return reason.DIVERGED_ITS
+        if self.seen == its - 1 >= self.restarts:
+            self.gave_up = self.why_stop(self.seen)
+            if self.gave_up:
+                return reason.DIVERGED_ITS
+        return reason.ITERATING
+
+
 def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, ncv: int | None = 12,
                         tol: float = 1e-12, low_rank: float | None = None, max_it: int = 500,
                         options: dict | None = None, gate: float | None = None,
-                        strict_tol: float | None = None) -> tuple[list, dict]:
+                        strict_tol: float | None = None, give_up: tuple | None = None) -> tuple[list, dict]:
     """The ~nev eigenvalues σ of (A, B) nearest the complex target τ, by SLEPc
     shift-and-invert on the real 2n form (every σ of the real form comes with its
     conjugate: nev, ncv are doubled there): Krylov–Schur on K_τ⁻¹B₂ applied through a complex
@@ -291,7 +343,8 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
     ≤ ``gate``, the same operator is solved again at ``strict_tol``, started from the pairs
     converged (a loose SLEPc tolerance usually suffices: its residual is that of K_τ⁻¹B₂,
     which the backward error on (A, B) shrinks by about |σ − τ|/‖A‖; info ``solves`` says how
-    many were made).  Collective."""
+    many were made).  ``give_up``: ``(restarts, budget)`` of a :class:`StallWatch` on the solve
+    (info ``gave_up``: why it stopped it, or "").  Collective."""
     PETSc = import_petsc()
     SLEPc = import_slepc()
     t0 = time.perf_counter()
@@ -327,6 +380,7 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 K.setUp()
                 eps.setOperators(K)
             scope.configure(eps)  # setFromOptions, last
+            watch = None if give_up is None else StallWatch(*give_up, tol=eps.getTolerances()[0]).attach(eps)
             try:
                 pairs, info = solve_tightened(eps, lambda: _converged_pairs(eps, ops, tau, real_form, B2), B2, gate,
                                               strict_tol, vectors, pseudo=lambda pairs: following(pairs, tau))
@@ -334,6 +388,7 @@ def complex_shift_solve(ops: SlidingPencilOps, tau: complex, *, nev: int = 2, nc
                 raise ConvergenceError(f"SLEPc's shift-and-invert at τ = {tau:.6g} failed (PETSc error "
                                        f"{err.ierr})") from err
         info["seconds"] = time.perf_counter() - t0
+        info["gave_up"] = "" if watch is None else watch.gave_up
         return pairs, info
     finally:
         for obj in (eps, K, B2, shell, factor, *vectors):

@@ -28,7 +28,7 @@ import numpy as np
 from ..core.comm import mpi_comm
 from ..core.errors import ProblemError
 from . import import_petsc, import_slepc, mumps_c
-from .flutter import PencilWork, complex_defaults, converged_pairs, local_csr, solve_tightened
+from .flutter import PencilWork, StallWatch, complex_defaults, converged_pairs, local_csr, solve_tightened
 from .options import FLUTTER, OptionsScope, mumps_controls
 
 
@@ -92,65 +92,28 @@ class _CompanionInverse:
         out[0::2], out[1::2] = w.real, w.imag
 
 
-class GrowthWatch:
-    """A stopping test for the damped search, a speed heuristic: after ``restarts``
-    Krylov–Schur restarts the solve ends as if out of iterations when
-
-    * no Ritz value of the operator grows (θ, λ = λ₀ + 1/θ or λ̄₀ + 1/θ: the same real part;
-      every Re λ < 0): the damping leaves nothing that grows near the target; or
-    * the best error estimate of the unconverged Ritz values, falling geometrically as it did
-      since the first restart, would not reach ``tol`` within ``budget`` restarts in all.
+class GrowthWatch(StallWatch):
+    """A stopping test for the damped search, a speed heuristic: the :class:`StallWatch`, and
+    after ``restarts`` Krylov–Schur restarts the solve also ends when no Ritz value of the
+    operator grows (θ, λ = λ₀ + 1/θ or λ̄₀ + 1/θ: the same real part; every Re λ < 0): the
+    damping leaves nothing that grows near the target.
 
     Without it a target where nothing converges runs to the cap of 500 restarts (10⁶ DOFs,
     μ = 0.05: the error estimate 0.25 → 0.09 in 8 restarts, about 10 s each:
-    docs/benchmarks.md, "Damping at scale").  The caller counts a stopped solve as not
-    converged, which proves nothing.  Reads the monitor's Ritz values and estimates (one
-    restart late); ``gave_up``: why it stopped the solve ("" when it did not).
-    :meth:`attach` puts it on an EPS."""
+    docs/benchmarks.md, "Damping at scale")."""
 
     def __init__(self, lam0: complex, restarts: int, budget: int, tol: float):
-        self.lam0, self.restarts, self.budget, self.tol = complex(lam0), int(restarts), int(budget), float(tol)
-        self.seen, self.growing, self.errors, self.gave_up = -1, True, {}, ""
-
-    def attach(self, eps) -> "GrowthWatch":
-        eps.setMonitor(self.monitor)
-        eps.setStoppingTest(self.stopping)
-        return self
+        super().__init__(restarts, budget, tol)
+        self.lam0, self.growing = complex(lam0), True
 
     def monitor(self, _eps, its, nconv, eig, err) -> None:
+        super().monitor(_eps, its, nconv, eig, err)
         theta = np.asarray(eig, dtype=complex)
         theta = theta[theta != 0]
-        self.seen = its
         self.growing = bool(theta.size == 0 or np.any(self.lam0.real + (1.0 / theta).real >= 0))
-        # the estimates of the pairs still wanted, as the progress monitor reads them (SLEPc
-        # sorts the converged first; 0 is "not estimated yet")
-        wanted = _eps.getDimensions()[0] if _eps is not None else len(err)
-        left = np.asarray(err, dtype=float)[nconv:max(wanted, nconv + 1)]
-        left = left[left > 0]
-        if left.size:
-            self.errors[its] = float(left.min())
 
-    def _too_slow(self, its: int) -> bool:
-        first, now = self.errors.get(1), self.errors.get(its)
-        if not first or not now or now <= self.tol or its <= 1:
-            return False
-        rate = (now / first) ** (1.0 / (its - 1))
-        return rate >= 1.0 or its + np.log(self.tol / now) / np.log(rate) > self.budget
-
-    def stopping(self, _eps, its, max_it, nconv, nev):
-        reason = import_slepc().EPS.ConvergedReason
-        if nconv >= nev:
-            return reason.CONVERGED_TOL
-        if its >= max_it:
-            return reason.DIVERGED_ITS
-        if self.seen == its - 1 >= self.restarts:
-            if not self.growing:
-                self.gave_up = "no Ritz value with Re λ ≥ 0"
-            elif self._too_slow(self.seen):
-                self.gave_up = f"converging too slowly to reach the tolerance within {self.budget} restarts"
-            if self.gave_up:
-                return reason.DIVERGED_ITS
-        return reason.ITERATING
+    def why_stop(self, its: int) -> str:
+        return "no Ritz value with Re λ ≥ 0" if not self.growing else super().why_stop(its)
 
 
 def quadratic_shift_solve(ops: QuadraticPencilOps, lam0: complex, *, nev: int = 2, ncv: int | None = 12,
