@@ -243,3 +243,13 @@ def test_solve_prints_both_onsets_and_results_h5_stores_them(cli, tmp_path):
     assert not any(ln.startswith("  flutter ") for ln in out.splitlines())
     with h5py.File(tmp_path / "n" / "results.h5") as f:
         assert "flutter" not in f["critical_friction"] and "divergence" in f["critical_friction"]
+
+
+def test_the_probes_past_a_stalled_cover_stay_below_mu_max():
+    """The crossing of the test above, asked up to μ_max between the crossing (0.98) and the
+    collision (1): the probes past the stalled cover reached a certified mode above μ_max (a
+    bracket outside the range asked for); none is looked for there now."""
+    fam = family(np.diag([1.0, 3.0, 1.8]), [[0, 1, 0], [-1, 0, 0], [0, 0, 0]])
+    onset = dense_onset([fam], start=0.5, mu_max=0.99)
+    assert onset.upper == np.inf or onset.upper <= 0.99
+    assert onset.lower < 0.99 and not onset.exact

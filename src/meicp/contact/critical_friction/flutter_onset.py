@@ -283,12 +283,13 @@ class _DenseOnset:
                                        f"above the certified flutter mode at μ = {self.upper:.10g}: a rounding blunder, "
                                        "no bracket")
 
-    def probe_past(self, mu: float, scale: float) -> None:
+    def probe_past(self, mu: float, scale: float, mu_max: float) -> None:
         """Where a cover stalls two eigenvalues meet: a non-real pair may be born just past
-        it.  The verdict at μ + scale·4^k, k = 0, 1, …, below the upper end, until certified."""
+        it.  The verdict at μ + scale·4^k, k = 0, 1, …, below the upper end and up to
+        ``mu_max`` (the onset asked for), until certified."""
         for k in range(PROBES):
             q = mu + scale * 4.0 ** k
-            if q >= self.upper or self.budget.out or self.flutters(q):
+            if q >= self.upper or q > mu_max or self.budget.out or self.flutters(q):
                 return
 
 
@@ -305,7 +306,7 @@ def dense_onset(families, start: float, mu_max: float, width: float = FLUTTER_EX
     if not np.isfinite(st.upper):
         st.extend(mu_max)
         if st.stalled and st.lower < mu_max:
-            st.probe_past(st.lower, width * max(st.lower, start))
+            st.probe_past(st.lower, width * max(st.lower, start), mu_max)
             probed = True
     below = None  # once the cover stalls: the last midpoint without a certified mode
     while np.isfinite(st.upper) and not st.budget.out:
@@ -321,7 +322,7 @@ def dense_onset(families, start: float, mu_max: float, width: float = FLUTTER_EX
         st.extend(mid)
         if st.lower < mid and st.stalled:
             if not probed:
-                st.probe_past(st.lower, width * max(st.lower, start))
+                st.probe_past(st.lower, width * max(st.lower, start), mu_max)
                 probed = True
             below = None if st.upper < mid else mid
     return _dense_result(st, mu_max)
