@@ -16,6 +16,7 @@ import gc
 import math
 import os
 import statistics
+import subprocess
 import time
 from pathlib import Path
 
@@ -30,6 +31,15 @@ MUMPS_ORDER_NAME = {0: "AMD", 2: "AMF", 3: "SCOTCH", 4: "PORD", 5: "METIS", 6: "
 
 
 # ----------------------------------------------------------------------------- CSV
+
+def git_commit() -> str:
+    """The short hash of the checkout's HEAD ("" without git): the code a benchmark row measured."""
+    try:
+        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True).stdout.strip()
+    except OSError:
+        return ""
+
 
 def out_dir() -> Path:
     """Where CSVs and charts go (created if missing)."""

@@ -44,7 +44,7 @@ import argparse
 
 import numpy as np
 
-from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
+from bench_common import ROOT, csv_path, git_commit, read_rows, row_identity, rows_before, save_figure, write_rows
 import meicp
 from meicp.contact.damped_proportional import proportional_damping
 from meicp.examples import two_layer_scene
@@ -115,7 +115,7 @@ def onsets(args) -> None:
                          "flutter_upper": f"{f.upper:.10g}", "flutter_exact": f.exact,
                          "divergence_lower": f"{d.lower:.10g}", "divergence_upper": f"{d.upper:.10g}",
                          "divergence_exact": d.exact, "first": mu.first or "",
-                         "seconds": f"{time.perf_counter() - t0:.2f}", "commit": bs._commit()})
+                         "seconds": f"{time.perf_counter() - t0:.2f}", "commit": git_commit()})
             print(rows[-1], flush=True)
     write_rows(csv_path("damping_onsets"), rows, ONSET_FIELDS, keep=lambda row: False)
 
@@ -185,7 +185,7 @@ def solve_row(args, doc: dict, eig: dict, peaks, timed_out: bool, load1: float, 
             "eigensolve_s": f"{seconds:.3f}" if seconds else "",
             "ratio": f"{solve_s / seconds:.2f}" if seconds else "",
             "peak_mb": "/".join(f"{p:.0f}" for p in peaks), "load1": f"{load1:.1f}",
-            "date": datetime.date.today().isoformat(), "commit": bs._commit(),
+            "date": datetime.date.today().isoformat(), "commit": git_commit(),
             "flutter_evidence": (doc.get("flutter_evidence") or "")[:300]}
 
 

@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench_common import ROOT, csv_path, read_rows, row_identity, rows_before, save_figure, write_rows
+from bench_common import ROOT, csv_path, git_commit, read_rows, row_identity, rows_before, save_figure, write_rows
 from meicp.core.blas_kernel import choose_openblas_kernel
 
 SCENES = ROOT / "data" / "scenes"
@@ -102,14 +102,6 @@ def _run(cmd: list[str], timeout: float, log: Path | None = None) -> tuple[str, 
     return done.stdout, peaks, time.perf_counter() - t0, False
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True).stdout.strip()
-    except OSError:
-        return ""
-
-
 def run(args) -> None:
     import meicp
 
@@ -141,7 +133,7 @@ def run(args) -> None:
                "ratio": f"{solve_s / eig['seconds']:.2f}" if eig.get("seconds") else "",
                "peak_mb": "/".join(f"{p:.0f}" for p in peaks),
                "eigensolve_peak_mb": "/".join(f"{p:.0f}" for p in eig_peaks),
-               "load1": f"{load1:.1f}", "date": datetime.date.today().isoformat(), "commit": _commit(),
+               "load1": f"{load1:.1f}", "date": datetime.date.today().isoformat(), "commit": git_commit(),
                "evidence": (doc.get("evidence") or "")[:300],
                "flutter_evidence": (doc.get("flutter_evidence") or "")[:200]}
         rows.append(row)

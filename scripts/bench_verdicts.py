@@ -28,7 +28,7 @@ import time
 import meicp  # before NumPy: it sets OpenBLAS's kernel for this CPU (meicp.core.blas_kernel)
 import numpy as np
 
-from bench_common import csv_path, scatter_verdicts, slepc_eigensolve, write_rows
+from bench_common import csv_path, git_commit, scatter_verdicts, slepc_eigensolve, write_rows
 from meicp.contact import pencil
 from meicp.contact.divergence import search, sigma_window, steps
 from meicp.core.matrix import is_petsc_mat
@@ -131,7 +131,7 @@ def cost(args):
                 rows[-1].update(flutter=r.flutter, flutter_s=f"{r.timings.get('flutter', 0.0):.2f}",
                                 growth_lower=f"{g.lower:.6g}" if g else "",
                                 growth_upper="" if g is None or g.upper is None else f"{g.upper:.6g}",
-                                commit=_commit(), flutter_evidence=r.flutter_evidence[:300])
+                                commit=git_commit(), flutter_evidence=r.flutter_evidence[:300])
                 print(r.flutter_evidence, flush=True)
             print(rows[-1], flush=True)
             print(r.evidence, flush=True)
@@ -140,14 +140,6 @@ def cost(args):
             write_rows(csv_path("verdicts_cost_flutter"), rows, COST_FLUTTER)
         else:
             write_rows(csv_path("verdicts_cost"), rows, COST)
-
-
-def _commit() -> str:
-    import subprocess
-
-    out = subprocess.run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "rev-parse", "--short", "HEAD"],
-                         capture_output=True, text=True)
-    return out.stdout.strip()
 
 
 def chart(args):

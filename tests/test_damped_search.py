@@ -306,3 +306,20 @@ def test_a_double_eigenvalue_on_the_imaginary_axis_is_no_flutter_mode(monkeypatc
     monkeypatch.setattr(limits, "ENUMERATE_N", 0)
     r = meicp.analyze(scene, flutter_dense_max=0)
     assert all(np.sqrt(complex(m.sigma)).real > 1e-6 for m in r.flutter_modes), r.flutter_modes
+
+
+def test_an_inaccurate_copy_of_a_mode_does_not_hide_it():
+    """A 2-DOF pencil under mass damping: SLEPc returned the mode σ = −4.8577 + 1.1844i and a
+    copy failing the residual gate with the same eigenvector; as a partner its angle 0 made
+    the mode's condition bound infinite (the mode undecided).  Partners are the pairs that
+    pass the gate, other than the mode itself."""
+    scene = scene_from_dict({
+        "lattice": {"nx": 2, "shear": 0.5750987534519004},
+        "layers": [{"name": "L0", "rows": 1, "stiffness": 3.3816421311312554, "density": 0.5291613806026279},
+                   {"name": "L1", "rows": 1, "stiffness": 1.874226481977097, "density": 1.4080900170501343}],
+        "boundary": {"top": "fixed_y", "bottom": "contact", "left": "fixed_x", "right": "free"},
+        "contact": {"friction": 5.0, "states": "slip-"}, "damping": {"mass": 0.001}})
+    dense, searched = meicp.analyze(scene), meicp.analyze(scene, flutter_dense_max=0)
+    assert dense.flutter is True and searched.flutter is True
+    assert searched.flutter_growth.lower <= dense.flutter_growth.upper * (1 + 1e-9)
+    assert abs(searched.flutter_modes[0].sigma - dense.flutter_modes[0].sigma) <= 1e-8
