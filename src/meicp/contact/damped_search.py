@@ -191,12 +191,13 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
             real_ritz += info.get("real_ritz", 0)
             disks.append((lam0, info["radius"], len(pairs), passed, info["iterations"], info["gave_up"]))
             for lam, x, res in pairs:
+                if res > RESIDUAL_TOL:
+                    rejected.append(RejectedPair(lam * lam, res))
+                    continue
                 partners = [(l2, x2) for l2, x2, r2 in pairs  # as the undamped search's
                             if r2 <= RESIDUAL_TOL and abs(l2 - lam) > SAME * abs(lam)]
                 r = lambda_margin(ops, lam, res, x, partners)
-                if res > RESIDUAL_TOL:
-                    rejected.append(RejectedPair(lam * lam, res))
-                elif lam.imag > r and lam.real > r and abs(lam) > zero_reach(ops, res):
+                if lam.imag > r and lam.real > r and abs(lam) > zero_reach(ops, res):
                     if not any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):
                         modes.append(FlutterCandidate(lam * lam, _normalise(x), res, 2 * abs(lam) * r + r * r,
                                                       f"companion shift-invert at λ₀ = {lam0:.6g}"))

@@ -149,15 +149,16 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     failed.append(f"the solve at τ = {tau:.6g} was stopped after {info['iterations']} restarts, "
                                   f"{info['gave_up']}")
                 for sigma, x, res in pairs:
+                    if res > residual_tol:
+                        rejected.append(RejectedPair(sigma, res))
+                        continue
                     # other eigenpairs: those passing the gate, not σ itself again (an inaccurate copy of σ
                     # with its eigenvector would make any mode undecided)
                     others = [(s2, x2) for s2, x2, r2 in pairs
                               if r2 <= residual_tol and abs(s2 - sigma) > SAME * abs(sigma)]
                     kappa = max(1.0, partner_condition(sigma, x, others, lambda s1, s2: (1.0, 0.0)))
                     margin = MARGIN * kappa * res * (ops.norm_A / ops.norm_B + abs(sigma))
-                    if res > residual_tol:
-                        rejected.append(RejectedPair(sigma, res))
-                    elif abs(sigma.imag) > margin:
+                    if abs(sigma.imag) > margin:
                         if not any(abs(sigma - m.sigma) <= SAME * abs(m.sigma) for m in modes):
                             modes.append(FlutterCandidate(sigma, _normalise(x), res, margin,
                                                           f"shift-invert at τ = {tau:.6g}"))
