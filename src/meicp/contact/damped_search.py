@@ -31,8 +31,9 @@ from .damped_flutter_free import damped_flutter_free
 from .flutter_growth import FlutterGrowth, quadratic_ceiling, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             depth_note, depth_used, off_cluster, proxy_targets)
-from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, PencilFlutter, RejectedPair,
-                             memory_refusal, partner_condition, real_ritz_note, search_conclusion)
+from .flutter_verdict import (GIVE_UP_BUDGET, GIVE_UP_RESTARTS, MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate,
+                             PencilFlutter, RejectedPair, gated_partners, memory_refusal, partner_condition,
+                             real_ritz_note, search_conclusion)
 from .lines import BASE
 from .on_root import on_root
 from .proxy import PROXY_NX, PROXY_ROWS
@@ -44,14 +45,6 @@ log = logging.getLogger("meicp")
 #: (docs/benchmarks-notes.md, "damped flutter search")
 SEARCH_NEV = 2
 SEARCH_NCV = 12
-#: restarts after which a solve stops when its Ritz values show nothing growing (Re λ < 0), or
-#: when its error estimates, falling as they did, would not reach the tolerance within
-#: GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter_quadratic.GrowthWatch`; the undamped
-#: search the latter only, :class:`~meicp.petsc.flutter.StallWatch`: at μ = 0.002 on a 10⁵-DOF
-#: lattice its last target ran on toward 500 restarts of 2.7 s, the estimate stuck at 1.5e-2): a
-#: speed heuristic, the target then counts as failed (undecided)
-GIVE_UP_RESTARTS = 10
-GIVE_UP_BUDGET = 60
 
 
 def lambda_margin(ops: QuadraticPencilOps, lam: complex, residual: float, x, partners=()) -> float:
@@ -194,9 +187,7 @@ def _at_targets(ops: QuadraticPencilOps, targets, why: str, ceiling=None, **solv
                 if res > RESIDUAL_TOL:
                     rejected.append(RejectedPair(lam * lam, res))
                     continue
-                partners = [(l2, x2) for l2, x2, r2 in pairs  # as the undamped search's
-                            if r2 <= RESIDUAL_TOL and abs(l2 - lam) > SAME * abs(lam)]
-                r = lambda_margin(ops, lam, res, x, partners)
+                r = lambda_margin(ops, lam, res, x, gated_partners(pairs, lam, RESIDUAL_TOL))
                 if lam.imag > r and lam.real > r and abs(lam) > zero_reach(ops, res):
                     if not any(abs(lam * lam - m.sigma) <= SAME * abs(m.sigma) for m in modes):
                         modes.append(FlutterCandidate(lam * lam, _normalise(x), res, 2 * abs(lam) * r + r * r,

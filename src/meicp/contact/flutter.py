@@ -40,15 +40,14 @@ from ..petsc.mat import distributed
 from ..petsc.flutter_quadratic import QuadraticPencilOps
 from .damped import damped_flutter
 from .damped_proportional import mapped_flutter, proportional_damping
-from .damped_search import (GIVE_UP_BUDGET, GIVE_UP_RESTARTS, damped_targets, growth_ceiling, lambda_margin,
-                            no_target, search_damped_flutter)
+from .damped_search import damped_targets, growth_ceiling, lambda_margin, no_target, search_damped_flutter
 from .flutter_dense import NO_FLUTTER, _fastest_first, _normalise, dense_flutter
 from .flutter_growth import combine_growths, search_growth
 from .flutter_proxy import (LINE_FREQUENCIES, LINE_GROWTH, LINE_WHY, OFF_CLUSTER_TRIES,
                             SEARCH_TARGETS, depth_note, depth_used, off_cluster, proxy_targets)
-from .flutter_verdict import (MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate, FlutterVerdict, PencilFlutter,
-                             RejectedPair, memory_refusal, partner_condition, real_ritz_note,
-                             search_conclusion)
+from .flutter_verdict import (GIVE_UP_BUDGET, GIVE_UP_RESTARTS, MARGIN, RESIDUAL_TOL, SAME, FlutterCandidate,
+                             FlutterVerdict, PencilFlutter, RejectedPair, gated_partners, memory_refusal,
+                             partner_condition, real_ritz_note, search_conclusion)
 from .lines import BASE, ContactState
 from .on_root import on_root
 from .problem import pencil_of
@@ -152,11 +151,8 @@ def search_flutter(A, B, targets, comm=None, *, nev: int = SEARCH_NEV, ncv: int 
                     if res > residual_tol:
                         rejected.append(RejectedPair(sigma, res))
                         continue
-                    # other eigenpairs: those passing the gate, not σ itself again (an inaccurate copy of σ
-                    # with its eigenvector would make any mode undecided)
-                    others = [(s2, x2) for s2, x2, r2 in pairs
-                              if r2 <= residual_tol and abs(s2 - sigma) > SAME * abs(sigma)]
-                    kappa = max(1.0, partner_condition(sigma, x, others, lambda s1, s2: (1.0, 0.0)))
+                    kappa = max(1.0, partner_condition(sigma, x, gated_partners(pairs, sigma, residual_tol),
+                                                       lambda s1, s2: (1.0, 0.0)))
                     margin = MARGIN * kappa * res * (ops.norm_A / ops.norm_B + abs(sigma))
                     if abs(sigma.imag) > margin:
                         if not any(abs(sigma - m.sigma) <= SAME * abs(m.sigma) for m in modes):

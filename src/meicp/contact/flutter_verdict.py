@@ -20,6 +20,14 @@ RESIDUAL_TOL = 1e-10
 MARGIN = 1e6
 #: the searches: a value within this relative distance of an earlier one is the same eigenvalue
 SAME = 1e-9
+#: restarts after which a search's solve stops when its error estimates, falling as they did,
+#: would not reach the tolerance within GIVE_UP_BUDGET restarts (:class:`~meicp.petsc.flutter.StallWatch`;
+#: at μ = 0.002 on a 10⁵-DOF lattice the undamped search's last target ran on toward 500
+#: restarts of 2.7 s, the estimate stuck at 1.5e-2), or — the damped search — when its Ritz
+#: values show nothing growing (Re λ < 0; :class:`~meicp.petsc.flutter_quadratic.GrowthWatch`):
+#: a speed heuristic, the target then counts as failed (undecided)
+GIVE_UP_RESTARTS = 10
+GIVE_UP_BUDGET = 60
 
 
 def separation(x1, x2) -> float:
@@ -45,11 +53,16 @@ def partner_condition(value: complex, x, partners, spread) -> float:
     x = np.asarray(x)
     worst = np.inf
     for value2, x2 in [(complex(value).conjugate(), x.conjugate()), *partners]:
-        if value2 == value and x2 is x:
-            continue
         a, b = spread(complex(value), complex(value2))
         worst = min(worst, a * separation(x, x2) + b)
     return 1.0 / worst if worst > 0 else np.inf
+
+
+def gated_partners(pairs, value: complex, gate: float) -> list:
+    """The (value₂, x₂) of a solve's ``pairs`` ((value, x, backward error)) that serve
+    :func:`partner_condition` for ``value``: those passing the residual ``gate``, ``value`` itself
+    excluded (an inaccurate copy of it with its eigenvector would make any mode undecided)."""
+    return [(v2, x2) for v2, x2, r2 in pairs if r2 <= gate and abs(v2 - value) > SAME * abs(value)]
 
 
 @dataclass(frozen=True)

@@ -55,7 +55,7 @@ def inertia(A) -> tuple[int, int, int]:
     ksp = PETSc.KSP().create(comm=A.getComm())
     try:
         ksp.setOperators(A)
-        ordering = PORD_ORDERING if A.getSize()[0] >= PORD_FROM else ORDERING
+        ordering = PORD_ORDERING if n >= PORD_FROM else ORDERING
         defaults = {"ksp_type": "preonly", "pc_type": "cholesky",
                     "pc_factor_mat_solver_type": "mumps", **ordering, **INERTIA_OPTIONS}
         with OptionsScope(PREFIX, defaults) as scope:
