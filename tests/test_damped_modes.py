@@ -52,7 +52,7 @@ def test_the_followed_mode_is_the_enumerated_one(eta, monkeypatch):
 def test_a_followed_mode_is_always_an_enumerated_mode(seed, monkeypatch):
     """Never a wrong mode: whatever the path at scale certifies, the enumeration of every
     support finds too; where it finds nothing the verdict is undecided, or proved by the
-    damped Rayleigh bound, never "stable" by default."""
+    damped Rayleigh bound or the condensed λ-windows, never "stable" by default."""
     scene = random_lattice(seed)
     exact = meicp.analyze(scene, flutter=False)
     r = followed(scene, monkeypatch)
@@ -62,17 +62,18 @@ def test_a_followed_mode_is_always_an_enumerated_mode(seed, monkeypatch):
         for lam in growth(r):
             assert np.min(np.abs(lam_exact - lam)) <= 1e-8 * max(lam, 1e-3)
     elif r.divergence is False:
-        assert r.proofs[0].test == "damped-rayleigh" and exact.divergence is False
+        assert r.proofs[0].test in ("damped-rayleigh", "damped-condensed-windows") and exact.divergence is False
     else:
         assert "proves nothing" in r.evidence
 
 
 def test_without_an_undamped_mode_nothing_is_followed(monkeypatch):
+    """Nothing to follow; the condensed λ-windows then prove what the enumeration finds (no mode)."""
     scene = damped(two_layer_scene(8, (2, 3), mu=2.0, states="slip-", shear=-0.3), eta=(0.05, 0.01))
     assert meicp.analyze(scene, flutter=False).divergence is False
     r = followed(scene, monkeypatch)
-    assert r.divergence is None and r.stable is None
-    assert "no undamped divergence mode to follow" in r.evidence and "proves nothing" in r.evidence
+    assert r.divergence is False and r.proofs[0].test == "damped-condensed-windows"
+    assert "no undamped divergence mode to follow" in r.evidence
 
 
 def test_real_roots_keep_a_double_root_perturbed_by_rounding():

@@ -76,12 +76,14 @@ def test_a_target_far_from_every_eigenvalue_proves_nothing():
 
 
 def test_a_damped_scene_past_every_dense_limit_is_unstable_by_its_flutter(monkeypatch):
-    """Past the enumeration's limits the damped divergence is undecided where the damped
-    Rayleigh bound proves nothing and the undamped pencil has no mode to follow (its condensed
-    proof), and the search's certified flutter mode still decides the verdict."""
+    """Past the enumeration's limits, where the damped Rayleigh bound proves nothing and the
+    undamped pencil has no mode to follow, the condensed λ-windows prove the damped divergence
+    absent (tests/test_damped_windows.py checks them against the enumeration), and the search's
+    certified flutter mode decides the verdict."""
     monkeypatch.setattr(limits, "ENUMERATE_N", 10)
     r = meicp.analyze(SCENES["base"], flutter_dense_max=10)
-    assert r.divergence is None and "no undamped divergence mode to follow" in r.evidence and "proves nothing" in r.evidence
+    assert r.divergence is False and r.proofs[0].test == "damped-condensed-windows"
+    assert "no undamped divergence mode to follow" in r.evidence and "damped Rayleigh bound at τ" in r.evidence
     assert r.flutter is True and r.stable is False and r.status == "solved"
 
 

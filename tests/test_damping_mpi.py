@@ -160,3 +160,23 @@ def test_the_damped_flutter_free_proof_is_the_same_on_one_and_two_ranks(comm):
     assert two.stable is True and one.stable is True
     assert "no eigenvalue grows (a proof)" in two.flutter_evidence
     assert comm.allgather(two.stable) == [True] * comm.size
+
+
+def test_the_condensed_lambda_windows_on_two_ranks(comm):
+    """The damped λ-windows (one MUMPS Schur series over both ranks, the certificates on rank 0)
+    prove what they prove on one rank, with the same windows."""
+    from mpi4py import MPI
+
+    from meicp.contact.damped_windows import prove_no_damped_divergence
+    from meicp.contact.problem import pencil
+    from meicp.examples import two_layer_scene
+
+    scene = damped(two_layer_scene(30, (6, 6), bottom="fixed", stiffness=(1.0, 4.0), density=(1.0, 2.0),
+                                   interface={"kind": "frictional", "friction": 1.0, "states": "slip+"}),
+                   eta=(0.02, 0.02))
+    with pencil(scene, comm=comm) as pen:
+        two = prove_no_damped_divergence(pen, comm)
+    with pencil(scene, comm=MPI.COMM_SELF) as pen:
+        one = prove_no_damped_divergence(pen, MPI.COMM_SELF)
+    assert two.proved and one.proved
+    assert [w[:2] for w in two.windows] == [w[:2] for w in one.windows]

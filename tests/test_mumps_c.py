@@ -135,6 +135,27 @@ def test_the_schur_series_on_two_ranks(comm):
     _series_matches(comm)
 
 
+def _quadratic_series_matches(comm):
+    """With H₂ the series factors H₀ + σH₁ + σ²H₂ (the damped condensation's quadratic pencil)."""
+    H0, H1, rows = _bordered()
+    H2 = H1.copy()
+    H2.data = np.abs(H2.data) * 0.5
+    with mumps_c.SchurSeries(comm, H0, H1, rows, H2=H2) as series:
+        for lam in (0.4, 0.0, 1.5):
+            S = series(lam)
+            ref = dense_schur_of(H0 + lam * H1 + lam * lam * H2, rows)
+            assert np.abs(S - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_the_quadratic_schur_series_is_the_dense_schur_complement():
+    _quadratic_series_matches(None)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_the_quadratic_schur_series_on_two_ranks(comm):
+    _quadratic_series_matches(comm)
+
+
 def test_the_schur_series_refuses_two_patterns():
     H0, H1, rows = _bordered()
     H1 = H1.copy()
@@ -157,6 +178,11 @@ def test_without_dmumps_the_series_falls_back_to_petsc(monkeypatch):
         assert not isinstance(fallback, mumps_c.SchurSeries)
         for S, sigma in zip(expected, (0.0, 0.7)):
             assert np.abs(fallback(sigma) - S).max() <= 1e-12 * np.abs(S).max()
+    H2 = H1.copy()
+    H2.data = np.abs(H2.data)
+    with schur.schur_series(None, H0, H1, rows, H2) as fallback:
+        ref = dense_schur_of(H0 + 0.7 * H1 + 0.49 * H2, rows)
+        assert np.abs(fallback(0.7) - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
 def _interior_matches(comm):

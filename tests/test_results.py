@@ -258,6 +258,19 @@ def test_critical_friction_and_its_bracket_in_results_h5(tmp_path, two_layers, m
     assert got == expected
 
 
+def test_a_failed_critical_friction_is_read_back(tmp_path, two_layers):
+    """``meicp solve --critical-friction`` on a floating body stores ``error`` instead of a value:
+    load_results reads it as such (it raised KeyError 'value' on every such file)."""
+    import meicp
+    from meicp.contact.critical_friction import CriticalFrictionFailed
+
+    files = write_results(tmp_path / "o", two_layers, unstable_result(two_layers), plots=False,
+                          critical_friction={"error": "μ_c undefined: the body floats"})
+    back = meicp.load_results(files["results"])
+    assert back.critical_friction == CriticalFrictionFailed("μ_c undefined: the body floats")
+    assert "μ_c not computed: μ_c undefined" in repr(back)
+
+
 def test_modal_result_written_like_any_mode(tmp_path):
     """A scene without contact: its vibration modes (σ = −ω²) with their frequency."""
     import h5py

@@ -22,7 +22,8 @@ proportional to stiffness and mass (``C = cK + αM``) makes it the undamped MEiC
 pencil, decided by the undamped verdict (:mod:`.damped_proportional`); any other damping: the damped
 Rayleigh bound (:mod:`.damped_rayleigh`, one LDLᵀ inertia) may prove that no λ ≥ 0 exists,
 the undamped modes followed to the damped problem (:mod:`.damped_modes`) may find certified
-ones, and otherwise it is *undecided*, so that the damped flutter search at scale
+ones, the condensed λ-windows (:mod:`.damped_windows`) may prove there are none, and otherwise
+it is *undecided*, so that the damped flutter search at scale
 (:mod:`.damped_search`, past ``FLUTTER_DENSE_MAX`` retained DOFs) can still prove the lattice
 unstable.  Every other path that would leave C
 out (the modal analysis, the critical friction, the window procedure, a named divergence
@@ -51,6 +52,7 @@ from .flutter_verdict import RESIDUAL_TOL, FlutterCandidate, PencilFlutter, Reje
 from .damped_modes import followed_modes
 from .damped_proportional import proportional_damping, proportional_divergence
 from .damped_rayleigh import damped_rayleigh_bound
+from .damped_windows import prove_no_damped_divergence
 from .on_root import on_root
 
 log = logging.getLogger("meicp")
@@ -115,7 +117,8 @@ def damped_divergence(pen, scene, comm, method, lam_min: float, tol: float, opti
     """The divergence verdict of a damped pencil: the quadratic MEiCP enumerated (modes with
     σ = λ² ≥ lam_min listed; the verdict is about every λ ≥ 0).  Past the enumeration's
     limits (method ``"auto"``) the damped Rayleigh bound, else the undamped modes followed to
-    the damped problem (:mod:`.damped_modes`), else undecided; ProblemError when another
+    the damped problem (:mod:`.damped_modes`), else the condensed λ-windows
+    (:mod:`.damped_windows`), else undecided; ProblemError when another
     method is asked for, or ``"enumerate"`` past its limits.  Collective."""
     red = pen.maps
     r, n_j = int(red.retained.size), int(red.J.size)
@@ -142,10 +145,16 @@ def damped_divergence(pen, scene, comm, method, lam_min: float, tol: float, opti
                     f"{followed})")
             return DivergenceVerdict(listed, False, text, None, DivergenceProof("quadratic-followed",
                                                                                 "certified mode(s)"))
+        windows = prove_no_damped_divergence(pen, comm, tol=tol)
+        log.info("damped divergence: %s", windows.statement)
+        if windows.proved:
+            text = f"{windows.statement} ({statement}; {followed}: no damped mode found)"
+            return DivergenceVerdict([], True, text, None, DivergenceProof(
+                "damped-condensed-windows", windows.statement, sigma_window=(0.0, float("inf"))))
         text = (f"undecided: damped divergence with {r} retained DOFs and {n_j} complementarity pairs is past the "
                 f"dense enumeration's limits ({limits.ENUMERATE_N} DOFs, {limits.ENUMERATE_J} pairs, 2^|J|·r³ ≤ "
-                f"{limits.ENUMERATE_FLOPS:g}); {statement}; {followed}: no damped mode found, which proves nothing "
-                "(docs/damping.md)")
+                f"{limits.ENUMERATE_FLOPS:g}); {statement}; {followed}: no damped mode found, which proves nothing; "
+                f"{windows.statement} (docs/damping.md)")
         return DivergenceVerdict([], None, text, None, DivergenceProof("", text))
     max_j = options.get("max_j") if method == "enumerate" else None
 

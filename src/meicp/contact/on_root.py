@@ -25,3 +25,32 @@ def on_root(comm, fn):
         raise value
     return value
 
+
+
+def decided_on_root(comm, decide, serve):
+    """``decide(request)`` run on rank 0, where ``request(r)`` has every rank run ``serve(r)``
+    (collective work: a factorisation the dense decision asks for) and returns rank 0's result;
+    the other ranks serve rank 0's requests until it is done.  ``r`` must not be None (it ends
+    the service).  Returns ``decide``'s result on every rank, an exception raised on rank 0
+    raised on every rank (:func:`on_root`).  Collective."""
+    if comm is None or comm.Get_size() == 1:
+        return on_root(comm, lambda: decide(serve))
+
+    def decide_on_root():
+        def served(request):
+            comm.bcast(request, root=0)
+            return serve(request)
+        try:
+            return decide(served)
+        finally:
+            comm.bcast(None, root=0)
+
+    if comm.Get_rank() != 0:
+        while (request := comm.bcast(None, root=0)) is not None:
+            try:
+                serve(request)
+            except Exception:  # noqa: BLE001 — rank 0 meets it too and raises it on every rank
+                # (on_root); leaving the loop here would leave rank 0's broadcasts unmatched
+                # and the next collective call out of step (a hang in a later call)
+                continue
+    return on_root(comm, decide_on_root)

@@ -182,7 +182,9 @@ class InstabilityResult(Result):
         and ``growth_rate`` = λ of the quadratic problem (docs/damping.md).
     critical_friction: the critical friction stored beside the result (results.h5 of
         ``meicp solve --critical-friction``, read back by :func:`meicp.load_results`);
-        ``analyze`` leaves it None (:func:`meicp.critical_friction` computes it).
+        ``analyze`` leaves it None (:func:`meicp.critical_friction` computes it); a
+        :class:`~meicp.contact.critical_friction.result.CriticalFrictionFailed` when that
+        computation failed (its error, no value).
 
     ``repr()`` is one line (the verdict and the fastest modes); everything is in the fields,
     ``summary()`` and ``to_dict()``.
@@ -220,7 +222,8 @@ class InstabilityResult(Result):
         flutter = {True: "flutter", False: "no flutter"}.get(self.flutter, "flutter undecided")
         if m:
             flutter += f" growth {self.flutter_modes[0].growth_rate:.4g} ({m} mode{plural.get(m, 's')})"
-        mu = "" if self.critical_friction is None else f", μ_c {float(self.critical_friction):.6g}"
+        mu = ("" if self.critical_friction is None else f", μ_c {float(self.critical_friction):.6g}"
+              if isinstance(self.critical_friction, float) else f", μ_c {self.critical_friction}")
         return f"InstabilityResult({head}: {divergence}, {flutter}{mu}{dofs})"
 
     @property

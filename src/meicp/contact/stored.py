@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.json_values import restore_infinities
 from ..eicp.problem import EiCPResult
-from .critical_friction.result import CriticalFriction, Onset
+from .critical_friction.result import CriticalFriction, CriticalFrictionFailed, Onset
 from .damped import DampingUsed
 from .divergence.verdict import DivergenceProof
 from .flutter_growth import FlutterGrowth
@@ -102,6 +102,8 @@ def _static(record: dict | None, result: InstabilityResult) -> StaticResult | No
 def _critical_friction(record: dict | None):
     if record is None:
         return None
+    if record.get("error"):
+        return CriticalFrictionFailed(str(record["error"]))
     if all(record.get(k) is not None for k in ("lower", "upper", "exact")):
         divergence, flutter = (_onset(record.get(name)) for name in ("divergence", "flutter"))
         return CriticalFriction(record["upper"], record["lower"], bool(record["exact"]), record.get("evidence") or "",

@@ -15,7 +15,7 @@ from .._version import __version__
 from ..scene import Scene
 from .lattice_output import UNITS_CONVENTION
 from .results_records import critical_friction_record
-from .results_schema import CODE_LEGEND, DESCRIPTIONS, FORMAT, FORMAT_VERSION, STATE_CODES
+from .results_schema import CODE_LEGEND, DESCRIPTIONS, FORMAT, FORMAT_VERSION, STATE_CODES, group_key
 
 
 def _attr(value):
@@ -48,8 +48,14 @@ def _set_record(group, record: dict) -> None:
             _set_record(group.create_group(str(k)), v)
 
 
-def _strings(values, width: int = 16) -> np.ndarray:
-    return np.array([str(v).encode() for v in values], dtype=f"S{width}")
+#: h5py's variable-length UTF-8 string (``h5py.string_dtype("utf-8")``, without importing h5py here)
+UTF8 = np.dtype("O", metadata={"vlen": str})
+
+
+def _strings(values) -> np.ndarray:
+    """Variable-length UTF-8: a layer's name or a branch label of any length stored whole (a
+    fixed width cut them, mid-character for a non-ASCII name)."""
+    return np.array([str(v) for v in values], dtype=UTF8)
 
 
 def _describe(f) -> None:
@@ -98,7 +104,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
                        **{f"boundary_{s}": getattr(b, s) for s in ("top", "bottom", "left", "right")},
                        "base_friction": scene.contact.friction if scene.contact else None,
                        "n_embedded": len(scene.embedded)})
-        g.create_dataset("layers/name", data=_strings([l.name for l in scene.layers], 64))
+        g.create_dataset("layers/name", data=_strings([l.name for l in scene.layers]))
         g.create_dataset("layers/rows", data=np.array([l.rows for l in scene.layers], dtype=np.int64))
         g.create_dataset("layers/stiffness", data=np.array([l.stiffness for l in scene.layers]))
         g.create_dataset("layers/density", data=np.array([l.density for l in scene.layers]))
@@ -107,7 +113,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             _set_record(f.create_group("damping"), result.damping.to_dict())
         if scene.interfaces:
             nan = float("nan")
-            g.create_dataset("interfaces/below", data=_strings([i.below for i in scene.interfaces], 64))
+            g.create_dataset("interfaces/below", data=_strings([i.below for i in scene.interfaces]))
             g.create_dataset("interfaces/kind", data=_strings([i.kind for i in scene.interfaces]))
             g.create_dataset("interfaces/stiffness", data=np.array(
                 [nan if i.stiffness is None else i.stiffness for i in scene.interfaces]))
@@ -123,7 +129,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
         c.attrs["codes"] = CODE_LEGEND
         for key, label, mu, upper, lower in prep["lines"]:
             st = prep["states"].get(key) or []
-            g = c.create_group("base") if key == "base" else c.create_group(f"interfaces/{key}")
+            g = c.create_group("base") if key == "base" else c.create_group(f"interfaces/{group_key(key)}")
             _set_attrs(g, {"friction": mu, "label": label, "known": bool(st)})
             g.create_dataset("states", data=_strings(st if st else ["unknown"] * scene.nx))
             g.create_dataset("code", data=np.array([STATE_CODES[s] for s in st] if st else
@@ -150,7 +156,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
                 g.create_dataset(name, data=arr)
             for itf, arrays in prep["interface_forces"].items():
                 for name, arr in arrays.items():
-                    g.create_dataset(f"interfaces/{itf}/{name}", data=arr)
+                    g.create_dataset(f"interfaces/{group_key(itf)}/{name}", data=arr)
             if prep["static_u"] is not None:
                 g.create_dataset("u", data=prep["static_u"])
 
@@ -170,7 +176,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
                             "residual": m["residual"], "display_scale": scales[k]})
             mg.create_dataset("support", data=m["support"])
             for name, sup in m["interface_support"].items():
-                mg.create_dataset(f"interface_support/{name}", data=sup)
+                mg.create_dataset(f"interface_support/{group_key(name)}", data=sup)
 
         _write_flutter_modes(f.create_group("flutter_modes"), prep["flutter_modes"], scene.n_dofs)
 
@@ -226,8 +232,8 @@ def _write_flutter_modes(g, modes: list, n: int) -> None:
     g.create_dataset("frequency", data=column(lambda m: m["mode"].frequency))
     g.create_dataset("residual", data=column(lambda m: m["mode"].residual))
     g.create_dataset("radius", data=column(lambda m: m["mode"].radius))
-    g.create_dataset("branch", data=_strings([m["mode"].branch for m in modes], 64))
-    g.create_dataset("found_by", data=_strings([m["mode"].found_by for m in modes], 128))
+    g.create_dataset("branch", data=_strings([m["mode"].branch for m in modes]))
+    g.create_dataset("found_by", data=_strings([m["mode"].found_by for m in modes]))
     X = np.stack([m["x"] for m in modes]) if modes else np.zeros((0, n), dtype=complex)
     kw = {"chunks": (1, n), "compression": "gzip", "compression_opts": 4} if modes and n > 4096 else {}
     g.create_dataset("x_real", data=X.real, **kw)
@@ -236,4 +242,4 @@ def _write_flutter_modes(g, modes: list, n: int) -> None:
         mg = g.create_group(f"mode_{k}")
         mg.create_dataset("support", data=m["support"])
         for name, sup in m["interface_support"].items():
-            mg.create_dataset(f"interface_support/{name}", data=sup)
+            mg.create_dataset(f"interface_support/{group_key(name)}", data=sup)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ProblemError
-from .results_schema import FORMAT, FORMAT_VERSION
+from .results_schema import FORMAT, FORMAT_VERSION, name_of_key
 
 
 def read_results(path) -> dict:
@@ -118,14 +118,14 @@ def _states(contact) -> tuple[list, dict]:
         base = _strings(contact["base/states"])
     interfaces = {}
     for name, g in (contact["interfaces"].items() if "interfaces" in contact else ()):
-        interfaces[name] = _strings(g["states"]) if g.attrs.get("known", False) else []
+        interfaces[name_of_key(name)] = _strings(g["states"]) if g.attrs.get("known", False) else []
     return base, interfaces
 
 
 def _supports(g) -> tuple[np.ndarray, dict]:
     support = np.asarray(g["support"][()], dtype=np.int64)
     inner = g.get("interface_support")
-    return support, ({} if inner is None else {k: np.asarray(v[()], dtype=np.int64) for k, v in inner.items()})
+    return support, ({} if inner is None else {name_of_key(k): np.asarray(v[()], dtype=np.int64) for k, v in inner.items()})
 
 
 def _modes(g) -> list[dict]:
@@ -162,7 +162,7 @@ def _static(g) -> dict | None:
     out = {"attrs": _attrs(g), "arrays": {}, "interfaces": {}}
     for name, item in g.items():
         if name == "interfaces":
-            out["interfaces"] = {itf: {k: v[()] for k, v in arrays.items()} for itf, arrays in item.items()}
+            out["interfaces"] = {name_of_key(itf): {k: v[()] for k, v in arrays.items()} for itf, arrays in item.items()}
         else:
             out["arrays"][name] = item[()]
     return out

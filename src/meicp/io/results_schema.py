@@ -82,3 +82,17 @@ FIELD_DESCRIPTIONS = {
 FILES = {"results": "results.h5", "lattice": "lattice.h5", "xdmf": "lattice.xdmf",
          "mode_png": "mode.png", "flutter_png": "flutter_mode.png", "contacts_png": "contacts.png"}
 STATIC_FIELDS = ("r_n", "r_t", "gap", "slip")
+
+
+def group_key(name: str) -> str:
+    """A material's name as an HDF5 link name (``contact/interfaces/<name>``,
+    ``interface_support/<name>``): '%' and '/' percent-encoded, and a name of dots alone ('.',
+    '..') too — HDF5 reads '/' as a path separator and refuses '.' as a new link.  Any name the
+    scene accepts is stored and read back (:func:`name_of_key`)."""
+    key = name.replace("%", "%25").replace("/", "%2F")
+    return key.replace(".", "%2E") if set(key) <= {"."} else key
+
+
+def name_of_key(key: str) -> str:
+    """The inverse of :func:`group_key`."""
+    return key.replace("%2E", ".").replace("%2F", "/").replace("%25", "%")

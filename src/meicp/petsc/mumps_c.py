@@ -241,7 +241,8 @@ class ComplexFactor(LUFactor):
 
 class SchurSeries(_Instance):
     """``series(σ)``: the dense Schur complement onto ``rows`` (global indices, in their
-    order) of the symmetric matrix H₀ + σH₁ (SciPy CSR, one pattern, every rank holds both),
+    order) of the symmetric matrix H₀ + σH₁ (+ σ²H₂ with ``H2``: a quadratic pencil's) (SciPy
+    CSR, one pattern, every rank holds them),
     on every rank — DMUMPS LDLᵀ (general symmetric: indefinite allowed, H_FF must factor
     without pivoting into the Schur rows, which holds when it is definite), one analysis for
     every σ.  The same instance serves the interior block H_II (every row not a Schur row):
@@ -254,23 +255,28 @@ class SchurSeries(_Instance):
 
     def __init__(self, comm, H0: sp.csr_matrix, H1: sp.csr_matrix | None, rows: np.ndarray, *,
                  defaults: dict | None = None, icntl: dict | None = None, cntl: dict | None = None,
-                 what: str = "Schur complement of the condensation", option: str = "-meicp_schur_mat_mumps_"):
+                 what: str = "Schur complement of the condensation", option: str = "-meicp_schur_mat_mumps_",
+                 H2: sp.csr_matrix | None = None):
         # (the Schur block is the root of the elimination tree and is not factored: no ScaLAPACK
         # root whose pivots INFOG(12) would miss)
         super().__init__(comm, "d", 2, {19: 1, **(defaults or {})}, icntl, cntl, what, option)
         # H1 None: the constant matrix H0 (one factorisation, no second copy of its values)
         H0 = sp.csr_matrix(H0)
         H1 = None if H1 is None else sp.csr_matrix(H1)
-        if H1 is not None and (H0.shape != H1.shape or not (np.array_equal(H0.indptr, H1.indptr)
-                                                            and np.array_equal(H0.indices, H1.indices))):
+        H2 = None if H2 is None else sp.csr_matrix(H2)
+        if (H2 is not None and H1 is None) or any(
+                H is not None and (H0.shape != H.shape or not (np.array_equal(H0.indptr, H.indptr)
+                                                              and np.array_equal(H0.indices, H.indices)))
+                for H in (H1, H2)):
             self.destroy()
-            raise ValueError("SchurSeries needs H₀ and H₁ on one pattern")
+            raise ValueError("SchurSeries needs H₀, H₁ (and H₂) on one pattern")
         n = H0.shape[0]
         lo, hi = (0, n) if comm is None else ownership(n, comm.Get_rank(), comm.Get_size())
         local0 = H0[lo:hi].tocoo()
         upper = local0.col >= local0.row + lo  # a symmetric matrix gives one triangle (MUMPS sums both)
         self._h0 = local0.data[upper].astype(float)
         self._h1 = None if H1 is None else H1[lo:hi].tocoo().data[upper].astype(float)
+        self._h2 = None if H2 is None else H2[lo:hi].tocoo().data[upper].astype(float)
         rows_upper, cols_upper = local0.row[upper] + lo, local0.col[upper]
         self._rows(np.ascontiguousarray(rows_upper + 1, dtype=np.int32),
                    np.ascontiguousarray(cols_upper + 1, dtype=np.int32), self._h0.copy(), n)
@@ -301,7 +307,7 @@ class SchurSeries(_Instance):
         return S if self.comm is None else self.comm.bcast(S, root=0)
 
     def factor(self, sigma: float, *, diagonal: np.ndarray | None = None, exact: bool = False) -> tuple[int, int]:
-        """Factorise H₀ + σH₁ + diag(``diagonal``) (a vector of order n every rank holds, added
+        """Factorise H₀ + σH₁ (+ σ²H₂) + diag(``diagonal``) (a vector of order n every rank holds, added
         on the pattern's diagonal; its Schur complement is computed, not read) and return the
         interior's ``(negative, null)`` pivot counts (INFOG(12), INFOG(28)).  ``exact``: this
         factorisation full rank (ICNTL(35) = 0: the series' block low rank is an approximation
@@ -314,6 +320,8 @@ class SchurSeries(_Instance):
         else:
             np.multiply(self._h1, sigma, out=self._a)
             self._a += self._h0
+            if self._h2 is not None:
+                self._a += (sigma * sigma) * self._h2
         if diagonal is not None:
             diagonal = np.asarray(diagonal, dtype=float)
             mine = np.zeros(self._hi - self._lo, dtype=bool)

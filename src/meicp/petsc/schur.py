@@ -141,8 +141,9 @@ def dense_schur(comm, H: sp.spmatrix, rows: np.ndarray, *, symmetric: bool, opti
         A.destroy()
 
 
-def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
-    """σ ↦ :func:`dense_schur` of the symmetric H₀ + σH₁ (one pattern, every rank holds both)
+def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray, H2: sp.spmatrix | None = None):
+    """σ ↦ :func:`dense_schur` of the symmetric H₀ + σH₁ (+ σ²H₂ with ``H2``; one pattern, every
+    rank holds them)
     onto ``rows``, with one MUMPS analysis for every σ (:class:`~meicp.petsc.mumps_c.SchurSeries`,
     DMUMPS through its C interface: PETSc's interface analyses again at each σ (a quarter of
     each complement's time, docs/benchmarks-notes.md), and its refactorisation returned a wrong Schur complement on 2 ranks); block
@@ -151,10 +152,10 @@ def schur_series(comm, H0: sp.spmatrix, H1: sp.spmatrix, rows: np.ndarray):
     one PETSc factorisation per σ.  The result has
     ``destroy()`` (collective) and is a context manager."""
     if mumps_c.load("d")[0] is None:
-        return _SchurByPetsc(comm, H0, H1, rows)
+        return _SchurByPetsc(comm, H0, H1, rows, H2)
     icntl, cntl = mumps_controls(SCHUR + "mat_mumps_")
     return mumps_c.SchurSeries(mpi_comm(comm), H0, H1, rows, defaults={35: 2}, icntl=icntl,
-                               cntl={7: SCHUR_LOW_RANK, **cntl})
+                               cntl={7: SCHUR_LOW_RANK, **cntl}, H2=H2)
 
 
 def schur_factor(comm, H: sp.spmatrix, rows: np.ndarray, *, prefix: str, what: str) -> "mumps_c.SchurSeries":
@@ -183,11 +184,15 @@ def schur_factor(comm, H: sp.spmatrix, rows: np.ndarray, *, prefix: str, what: s
 class _SchurByPetsc:
     interior = False  # no interior solves or inertias (mumps_c.SchurSeries has them)
 
-    def __init__(self, comm, H0, H1, rows):
+    def __init__(self, comm, H0, H1, rows, H2=None):
         self.comm, self.H0, self.H1, self.rows = comm, sp.csr_matrix(H0), sp.csr_matrix(H1), rows
+        self.H2 = None if H2 is None else sp.csr_matrix(H2)
 
     def __call__(self, sigma: float) -> np.ndarray:
-        H = sp.csr_matrix((self.H0.data + sigma * self.H1.data, self.H0.indices, self.H0.indptr), shape=self.H0.shape)
+        values = self.H0.data + sigma * self.H1.data
+        if self.H2 is not None:
+            values = values + (sigma * sigma) * self.H2.data
+        H = sp.csr_matrix((values, self.H0.indices, self.H0.indptr), shape=self.H0.shape)
         return dense_schur(self.comm, H, self.rows, symmetric=True)
 
     def destroy(self) -> None:

@@ -8,7 +8,7 @@ Modules by concern: :mod:`.result` (the answer, :class:`CriticalFriction`, and e
 mode), :mod:`.bisection` (the cross-check on the σ-problem), :mod:`.flutter_onset` (μ_f: an
 interval cover and a certified flutter mode) and :mod:`.solve` (the driver)."""
 
-from .result import CriticalFriction, Onset
+from .result import CriticalFriction, CriticalFrictionFailed, Onset
 from .solve import critical_friction, friction_pencils
 
-__all__ = ["CriticalFriction", "Onset", "critical_friction", "friction_pencils"]
+__all__ = ["CriticalFriction", "CriticalFrictionFailed", "Onset", "critical_friction", "friction_pencils"]

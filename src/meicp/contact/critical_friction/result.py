@@ -82,6 +82,17 @@ def first_onset(divergence: Onset, flutter: Onset | None) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class CriticalFrictionFailed:
+    """The critical friction of a results.h5 whose ``meicp solve --critical-friction`` failed
+    (a floating body, a scene without friction, …): the error it stored, no value."""
+
+    error: str
+
+    def __str__(self) -> str:
+        return f"not computed: {self.error}"
+
+
 class CriticalFriction(float):
     """The friction at which the first instability starts, as a float — the upper end of the
     overall bracket: a μ at which a certified mode exists (inf when none was found) —

@@ -24,7 +24,7 @@ import numpy as np
 from ...core.comm import mpi_comm
 from ...lcp.certificates import optimise_scaling, pd_certificate
 from ..condenser import Condenser
-from ..on_root import on_root
+from ..on_root import decided_on_root
 from .cover import Cover, cover
 
 
@@ -71,17 +71,16 @@ def prove_no_divergence(comm, pencil, sigma_max: float, *, tol: float = 1e-10, m
     B is not diagonal and only σ_max = 0 can be proved (T1), a wider window is undecided.
     """
     comm = mpi_comm(comm)
-    rank = 0 if comm is None else comm.Get_rank()
     t_start = time.perf_counter()
     if not (sigma_max >= 0):
         raise ValueError(f"sigma_max must be ≥ 0, got {sigma_max}")
     if np.asarray(pencil.J).size == 0:
         return CondensedProof(False, "", "no complementarity DOFs: nothing to condense", np.nan, 0, ())
     with Condenser.of(pencil, comm, method=method) as cond:
-        return _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start)
+        return _prove(comm, cond, sigma_max, tol, max_samples, t_start)
 
 
-def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedProof:
+def _prove(comm, cond, sigma_max, tol, max_samples, t_start) -> CondensedProof:
     if sigma_max > 0 and not cond.pieces.mass_is_diagonal:
         return CondensedProof(False, "", "the σ-window certificates need a diagonal B (lumped mass); this pencil couples "
                                "contact and free DOFs through its mass (a one-row layer between two frictional "
@@ -89,30 +88,10 @@ def _prove(comm, rank, cond, sigma_max, tol, max_samples, t_start) -> CondensedP
     if not cond.prepare(need_tau=sigma_max > 0):
         return CondensedProof(False, "", cond.why, np.nan, 0, (), dict(cond.seconds))
     t = time.perf_counter()
-    if comm is None or comm.Get_size() == 1:
-        out = on_root(comm, lambda: _decide(cond.at, cond.sharper_tau, sigma_max, cond.tau, tol, max_samples,
-                                            cond.tau_scale))
-    else:
-        # rank 0 decides; the other ranks serve its requests (a σ to condense at, or SHARPER_TAU)
-        # until it sends None
-        def decide():
-            def served(request):
-                comm.bcast(request, root=0)
-                return _serve(cond, request)
-            try:
-                return _decide(served, lambda: served(SHARPER_TAU), sigma_max, cond.tau, tol, max_samples,
-                               cond.tau_scale)
-            finally:
-                comm.bcast(None, root=0)
-        if rank != 0:
-            while (request := comm.bcast(None, root=0)) is not None:
-                try:
-                    _serve(cond, request)
-                except Exception:  # noqa: BLE001 — rank 0 meets it too and raises it on every rank
-                    # (on_root); leaving the loop here would leave rank 0's broadcasts unmatched
-                    # and the next collective call out of step (a hang in a later call)
-                    continue
-        out = on_root(comm, decide)
+    # rank 0 decides; the other ranks serve its requests (a σ to condense at, or SHARPER_TAU)
+    out = decided_on_root(comm, lambda served: _decide(served, lambda: served(SHARPER_TAU), sigma_max, cond.tau,
+                                                       tol, max_samples, cond.tau_scale),
+                          lambda request: _serve(cond, request))
     secs = {**cond.seconds, "certify": time.perf_counter() - t, "total": time.perf_counter() - t_start}
     return replace(out, statement=f"{out.statement}; {cond.error_text()}", seconds=secs)
 

@@ -12,7 +12,8 @@ class DivergenceProof:
     test: ``"enumerate"`` (or the method asked for by name), ``"rayleigh-inertia"``,
     ``"condensed-pd"``, ``"condensed-windows"``, ``"rayleigh-window+condensed-windows"``,
     ``"certified-mode"``, ``"all-held"``, the damped lattice's ``"quadratic-enumerate"`` and
-    ``"damped-rayleigh"`` (:mod:`meicp.contact.damped_rayleigh`), ``"proportional-damping"``
+    ``"damped-rayleigh"`` (:mod:`meicp.contact.damped_rayleigh`), ``"damped-condensed-windows"``
+    (:mod:`meicp.contact.damped_windows`), ``"proportional-damping"``
     (:mod:`meicp.contact.damped_proportional`: the undamped verdict decides), or ``""`` when nothing was
     proved.  statement: the
     sentence saying what was proved (or why not).  supports_visited: supports the search
