@@ -51,7 +51,8 @@ def test_bad_scene_on_two_ranks_exits_promptly_once_and_writes_nothing(tmp_path,
     (5, ["-o", ""], "meicp solve: error: argument -o/--output: an empty path names no directory"),
     (22, ["--method", "enumerate"], "meicp: error: method 'enumerate' visits all 2^|J| supports: |J| = 22"),
     (5, ["--target", "-1e6x"], "meicp solve: error: argument --target: not a number: '-1e6x'"),
-], ids=["output-empty", "enumerate-22-pairs", "target-garbage"])
+    (5, ["--no-output", "-o", "somewhere"], "meicp: error: --no-output and -o somewhere ask for opposite things"),
+], ids=["output-empty", "enumerate-22-pairs", "target-garbage", "no-output-with-o"])
 def test_bad_flags_on_two_ranks_say_so_once_and_write_nothing(tmp_path, nx, args, words):
     """A usage error was printed by every rank (argparse runs on each), and the enumeration
     of 2^22 supports started (hours).  Now one message from rank 0, exit 2, nothing made."""

@@ -271,6 +271,39 @@ def test_a_failed_critical_friction_is_read_back(tmp_path, two_layers):
     assert "μ_c not computed: μ_c undefined" in repr(back)
 
 
+def _interface_named(name: str, states="slip+"):
+    from meicp.io.scene import scene_from_dict
+
+    return scene_from_dict({
+        "lattice": {"nx": 5},
+        "layers": [{"name": name, "rows": 2, "stiffness": 2.0, "density": 1.0, "viscosity": 0.02},
+                   {"name": "rock", "rows": 2, "stiffness": 1.0, "density": 1.0}],
+        "interfaces": [{"below": name, "kind": "frictional", "friction": 3.0, "states": states}],
+        "boundary": {"bottom": "fixed", "top": "fixed"}})
+
+
+@pytest.mark.parametrize("name, states", [
+    ("sand/clay", "slip+"), (".", "slip+"), ("..", "slip+"), ("50%/2F", "slip+"),
+    ("Schicht" + "ä" * 40, ["slip+", "grazing", "slip+", "slip+", "slip+"]),
+], ids=["slash", "dot", "dots", "percent", "long non-ASCII, grazing"])
+def test_any_name_the_scene_accepts_comes_back_from_results_h5(tmp_path, name, states):
+    """A name is an HDF5 link in results.h5 (contact/interfaces/<name>, interface_support/<name>)
+    and a branch label holds it: '/' split it into groups (load_results raised TypeError, or
+    lost the states), '.' could not be written (exit 3), a fixed width of 64 bytes cut a long
+    name mid-character (UnicodeDecodeError)."""
+    import meicp
+
+    scene = _interface_named(name, states)
+    result = meicp.analyze(scene)
+    files = write_results(tmp_path / "o", scene, result, plots=False)
+    back = meicp.load_results(files["results"])
+    assert back.interface_states == result.interface_states and name in back.interface_states
+    assert [m.branch for m in back.flutter_modes] == [m.branch for m in result.flutter_modes]
+    assert [sorted(m.interface_support) for m in back.modes] == [sorted(m.interface_support) for m in result.modes]
+    if not isinstance(states, str):
+        assert any(m.branch.endswith(f"{name}:slip+") for m in back.flutter_modes)
+
+
 def test_modal_result_written_like_any_mode(tmp_path):
     """A scene without contact: its vibration modes (σ = −ω²) with their frequency."""
     import h5py
@@ -414,6 +447,20 @@ def test_a_picture_that_cannot_be_drawn_leaves_the_results_whole(tmp_path, two_l
     assert "contacts_png" not in files and {"results", "lattice", "xdmf", "mode_png"} <= set(files)
     assert {p.name for p in out.iterdir()} == {FILES[k] for k in ("results", "lattice", "xdmf", "mode_png")}
     assert "contacts.png not written: ValueError: Image size of 124492x958" in caplog.text
+
+
+def test_a_directory_in_the_way_replaces_nothing(tmp_path, two_layers):
+    """A directory named results.h5 in the output directory: the last rename failed after the
+    others had replaced an earlier run's lattice.h5 and PNGs (exit 3, an internal error); now
+    a ProblemError names it before anything is moved."""
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "lattice.h5").write_bytes(b"earlier run")
+    (out / "results.h5").mkdir()
+    with pytest.raises(ProblemError, match="results.h5 into .* a directory of that name is in the way"):
+        write_results(out, two_layers, unstable_result(two_layers), plots=False)
+    assert (out / "lattice.h5").read_bytes() == b"earlier run"
+    assert {p.name for p in out.iterdir()} == {"lattice.h5", "results.h5"}
 
 
 def test_output_path_that_is_a_file(tmp_path, two_layers):

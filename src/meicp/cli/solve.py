@@ -76,8 +76,9 @@ def register(sub) -> None:
                    help="print one JSON document (verdict, modes, μ_c, outputs, timings, versions) instead "
                         "of the summary; nothing else goes to stdout")
     p.add_argument("--critical-friction", action="store_true",
-                   help="also compute μ_c, the smallest friction with a σ = 0 divergence mode (small scenes: enumeration; "
-                        "modes born at σ > 0 may exist below it, and the evidence then says so)")
+                   help="also compute the critical friction: the onsets of divergence (μ_c, a σ = 0 mode) and "
+                        "of flutter (μ_f, a non-real σ of steady sliding; not with --no-flutter), each a certified "
+                        "bracket, and which instability starts first (docs/critical-friction.md)")
     p.add_argument("--method", choices=METHODS,
                    help="MEiCP method (default: the scene's [solver] method; auto = enumerate when small)")
     p.add_argument("--target", type=finite,
@@ -230,6 +231,8 @@ def _run(args, comm, t0) -> int:
     except ProblemError:
         scene_text = None
     out = None
+    if args.no_output and args.output:
+        raise ProblemError(f"--no-output and -o {args.output} ask for opposite things: give one of them")
     if not args.no_output:
         out = Path(args.output) if args.output else Path("out") / Path(args.scene).stem
         _check_output_dir(out)

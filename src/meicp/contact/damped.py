@@ -146,7 +146,8 @@ def damped_divergence(pen, scene, comm, method, lam_min: float, tol: float, opti
             return DivergenceVerdict(listed, False, text, None, DivergenceProof("quadratic-followed",
                                                                                 "certified mode(s)"))
         windows = prove_no_damped_divergence(pen, comm, tol=tol)
-        log.info("damped divergence: %s", windows.statement)
+        log.info("damped divergence: %s (%s)", windows.statement,
+                 ", ".join(f"{k} {v:.1f} s" for k, v in windows.seconds.items()))
         if windows.proved:
             text = f"{windows.statement} ({statement}; {followed}: no damped mode found)"
             return DivergenceVerdict([], True, text, None, DivergenceProof(

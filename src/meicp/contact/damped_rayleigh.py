@@ -37,12 +37,18 @@ def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, 
     b, why = diagonal_mass(maps, M)
     if b is None:
         return None, why
-    Q = sp.csr_matrix(maps.Q)
     gershgorin, _ = friction_discs(maps, C, b)
-    norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
-    slack = SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
+    slack = congruence_slack(maps, C, b)
     return (gershgorin + slack) * (1 + 1e-12), (f"sym(D) ⪰ −ν·B with ν = {gershgorin + slack:.6g} (Gershgorin's "
                                                  "discs of the friction rows' part, scaled by B; Q̃ᵀCQ̃ ⪰ 0)")
+
+
+def congruence_slack(maps, C: sp.spmatrix, b: np.ndarray) -> float:
+    """s with ``Q̃ᵀCQ̃ + s·diag(b) ⪰ 0`` as computed: the rounding of the congruence of C ⪰ 0,
+    :data:`SLACK`·eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)."""
+    Q = sp.csr_matrix(maps.Q)
+    norm_Q = float(abs(Q).sum(axis=0).max()) * float(abs(Q).sum(axis=1).max())
+    return SLACK * np.finfo(float).eps * norm_Q * float(abs(C).sum(axis=0).max()) / float(b.min())
 
 
 def diagonal_mass(maps, M: sp.spmatrix) -> tuple[np.ndarray | None, str]:

@@ -316,6 +316,12 @@ def _write_rank0(directory: Path, scene, result, scene_text, vers, ranks, max_xd
             # signal waits for these renames, so the outputs are never half old, half new
             order = [k for k in ("lattice", "xdmf", "mode_png", "flutter_png", "contacts_png", "results")
                      if k in written]
+            # a rename that would fail (a directory of that name) must fail before the first one:
+            # the files moved already would be new beside old ones
+            blocked = [written[k] for k in order if (directory / written[k]).is_dir()]
+            if blocked:
+                raise ProblemError(f"cannot write {', '.join(blocked)} into {str(directory)!r}: a directory of that "
+                                   "name is in the way (nothing was replaced)")
             with uninterrupted():
                 for key in order:
                     os.replace(stage / written[key], directory / written[key])
