@@ -456,3 +456,20 @@ def test_mixed_formulation_above_the_condensed_limit():
     assert r.success, r.message
     assert len(r.states) == 1001 and len(r.interface_states["A"]) == 1001
     check_equilibrium(s, r)
+
+
+def test_where_the_condensed_lcp_fails_auto_goes_on_to_the_schur_formulation():
+    """extensive_interface.toml coarsened to 200 columns of 50 + 50 rows (200 contacts, the
+    largest the condensed formulation takes): Lemke and PETSc's VI both failed on its dense LCP
+    of 800 unknowns and ``analyze`` reported no contact states (not converged); auto now goes on
+    to the Schur formulation, certified on the sparse problem, and says so."""
+    import tomllib
+    from pathlib import Path
+
+    d = tomllib.loads((Path(__file__).parents[1] / "data" / "scenes" / "extensive_interface.toml").read_text())
+    d["lattice"]["nx"] = 200
+    for layer in d["layers"]:
+        layer["rows"] = 50
+    st = static_equilibrium(scene_from_dict(d))
+    assert st.success and st.notes[0].startswith("formulation auto: condensed failed (")
+    assert "schur next" in st.notes[0] and st.interface_states["lower"]

@@ -109,5 +109,14 @@ def static_equilibrium(scene, *, model=None, tol: float = TOL, method: str = "au
         return solve_schur(data, comm=comm, timings=timings, t_start=t_start, petsc_options=petsc_options)
     if formulation == "mixed":
         return solve_mixed(data, comm=comm, petsc_options=petsc_options, timings=timings, t_start=t_start)
-    return solve_condensed(data, method=method, lcp_tol=lcp_tol, classify_limit=classify_limit,
-                           lcp_options=lcp_options, timings=timings, t_start=t_start)
+    result = solve_condensed(data, method=method, lcp_tol=lcp_tol, classify_limit=classify_limit,
+                             lcp_options=lcp_options, timings=timings, t_start=t_start)
+    if (auto and not result.success and result.status != "infeasible" and not data.rigid_modes
+            and nc_total <= limits.STATIC_SCHUR_MAX_CONTACTS):
+        # the dense LCP of the friction cone's facets defeats Lemke on some scenes that the Schur
+        # formulation solves (extensive_interface.toml coarsened to 200 columns: 39,499 pivots,
+        # then PETSc's VI diverged); its answer is certified on the sparse problem as well
+        why = f"formulation auto: condensed failed ({result.message}), schur next"
+        result = solve_schur(data, comm=comm, timings=timings, t_start=t_start, petsc_options=petsc_options)
+        result.notes.insert(0, why)
+    return result
