@@ -52,13 +52,30 @@ class _Rank0Filter(logging.Filter):
         return world_rank() == 0
 
 
+class _StderrHandler(logging.StreamHandler):
+    """A handler on whatever ``sys.stderr`` is when a record is emitted, not the stream of its
+    set-up: one replaced since (a test harness's capture, closed after its test) made every
+    later record a "Logging error" and its line lost."""
+
+    def __init__(self):
+        super().__init__(sys.stderr)
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
+
+
 def configure_logging(verbosity: int = 0) -> None:
     """Send ``meicp`` log records to stderr on rank 0: WARNING by default, INFO with -v, DEBUG with -vv."""
     logger = logging.getLogger("meicp")
     level = logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG
     logger.setLevel(level)
     if not any(getattr(h, "_meicp", False) for h in logger.handlers):
-        handler = logging.StreamHandler(sys.stderr)
+        handler = _StderrHandler()
         handler.setFormatter(logging.Formatter("meicp: %(message)s"))
         handler.addFilter(_Rank0Filter())
         handler._meicp = True
