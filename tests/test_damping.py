@@ -383,6 +383,18 @@ RIGID_SLIDE = {
     "contact": {"friction": 3.0, "states": "slip-"}, "damping": {"mass": 0.01}}
 
 
+@pytest.mark.parametrize("eta", [1.0, 1e4])
+def test_a_zero_growth_mode_under_heavy_dashpots_is_reported_at_zero(eta):
+    """The rigid slide (λ = 0 exactly) under dashpots of η = 10⁴ was reported growing at
+    λ = 2.07e-6 — its certificate's row scale, |λ|·max|D_i|, could not tell it from 0 — and
+    under η = 1 at λ = −5.5e-13: a candidate within rounding of lam_min is tried there too, and
+    the sharper certificate at λ = 0 reports the mode."""
+    d = {**RIGID_SLIDE, "layers": [dict(layer, viscosity=eta * f) for layer, f in zip(RIGID_SLIDE["layers"], (1.0, 0.7))]}
+    with pencil(scene_from_dict(d)) as pen:
+        res = solve_quadratic_eicp(pen.A.toarray(), pen.B.toarray(), pen.damping().toarray(), pen.J)
+    assert res.status == "solved" and [s.lam for s in res.solutions] == [0.0]
+
+
 def test_an_exact_zero_growth_mode_computed_below_zero_is_found_not_proved_absent(monkeypatch):
     """The companion form puts the rigid slide's λ = 0 at about −4e-12, below the enumeration's
     rounding floor (eps·s): it is certified at λ = 0 itself, as the proportional path (the

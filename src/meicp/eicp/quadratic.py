@@ -50,7 +50,11 @@ UNVERIFIED_FACTOR = 1e3
 #: a real candidate below lam_min by at most this much (relative to s) is tried at lam_min
 #: itself: an exact λ = lam_min (a rigid slide that neither K nor C resists, λ = 0) is computed
 #: off by eps·‖A‖/|yᴴDx|, unbounded as D → 0, and by √eps when it is a Jordan block (D x = 0);
-#: the certificate at lam_min decides, so a wide band costs candidates, never a false solution
+#: the certificate at lam_min decides, so a wide band costs candidates, never a false solution.
+#: A candidate within the band above lam_min (or just below it, above the rounding floor) is tried
+#: at lam_min too: where both certify the
+#: same mode, λ = lam_min is reported (its certificate, without the |λ|·|D| term in the row
+#: scale, is the sharper; a rigid slide under dashpots of η = 10⁴ was reported at λ = 2e-6)
 CLAMP_BAND = 1e-6
 
 
@@ -283,6 +287,10 @@ def solve_quadratic_eicp(A, B, D, J, *, lam_min: float = 0.0, tol: float = DEFAU
                 if lam < floor:  # an exact λ = lam_min computed below it: certified at lam_min itself
                     lam = lam_min
                 sols, doubt = _support_solutions(A, B, D, J, R, S, float(lam), tol)
+                if lam != lam_min and abs(lam - lam_min) <= lam_min - band:  # within rounding of lam_min
+                    at_min, _ = _support_solutions(A, B, D, J, R, S, float(lam_min), tol)
+                    if at_min:
+                        sols = at_min + [s for s in sols if not any(_same_mode(s, m) for m in at_min)]
                 found += sols
                 unverified += doubt
     solutions = _unique(found)
@@ -360,6 +368,11 @@ def _feasible_vector(null: np.ndarray, inS: np.ndarray, dual_rows: np.ndarray) -
 
 def _sign_ok(xi: np.ndarray, inS: np.ndarray) -> bool:
     return not inS.any() or bool(np.all(xi[inS] > SUPPORT_TOL * np.abs(xi).max()))
+
+
+def _same_mode(s, other, angle: float = 1e-6) -> bool:
+    """Whether two solutions have one shape (up to sign; both normalised)."""
+    return min(np.linalg.norm(s.x - other.x), np.linalg.norm(s.x + other.x)) <= angle
 
 
 def _unique(solutions: list) -> list:
