@@ -79,7 +79,7 @@ SYMMETRIC = (True, True, False, False)
 class DampedPieces:
     """The split damped pencil (SciPy CSR, every rank): ``A = −(K̃ + N)``, ``B = M̃`` (diagonal),
     ``D = C̃ + N_C``; ``J`` the complementarity positions, ``slack`` s with ``C̃ + s·M̃ ⪰ 0`` (the
-    rounding of the congruence Q̃ᵀCQ̃, :func:`~.damped_rayleigh.friction_shift`), ``nu`` with
+    rounding of the congruence Q̃ᵀCQ̃, :func:`~.damped_rayleigh.congruence_slack`), ``nu`` with
     ``sym(D) ⪰ −ν·B``."""
 
     Kt: sp.csr_matrix
