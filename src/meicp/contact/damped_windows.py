@@ -52,7 +52,7 @@ from ..petsc.inertia import diagonal_scale, rounding_margin
 from ..petsc.schur import schur_series
 from .condenser import InteriorSolve
 from .condenser_certificates import PROBE_SAFETY, SCHUR_ERROR_FLOOR, refined_solve
-from .damped_rayleigh import congruence_slack, diagonal_mass, friction_shift
+from .damped_rayleigh import congruence_slack, friction_shift
 from .on_root import decided_on_root
 
 log = logging.getLogger("meicp")
@@ -109,7 +109,8 @@ class DampedPieces:
 
     def H_FF(self, lam: float) -> sp.csr_matrix:
         F = self.F
-        return ((self.Kt + lam * self.Ct + (lam * lam) * self.Mt)[F].tocsc()[:, F]).tocsr()
+        H = self.Kt if lam == 0 else self.Kt + lam * self.Ct + (lam * lam) * self.Mt
+        return (H[F].tocsc()[:, F]).tocsr()
 
     def ceiling(self) -> float:
         """λ_max: no solution has λ above it.  A solution has ``λ²·xᵀBx + λ·xᵀDx − xᵀAx = 0``
@@ -132,10 +133,7 @@ def damped_pieces(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = Non
     K, M_whole = lattice.whole()
     M = M_whole if M is None else M
     C = lattice.damping() if C is None else C
-    b, why = diagonal_mass(maps, M)
-    if b is None:
-        return None, why
-    nu, why = friction_shift(maps, C, M)
+    nu, why = friction_shift(maps, C, M)  # None where B is not diagonal positive or P̃₀ ≠ Q̃ᵀ
     if nu is None:
         return None, why
     Q = sp.csr_matrix(maps.Q)
@@ -143,6 +141,7 @@ def damped_pieces(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = Non
     KQ, MQ, CQ = (K @ Q).tocsr(), (M @ Q).tocsr(), (C @ Q).tocsr()
     if (Pmu @ MQ).count_nonzero():
         return None, "the friction rows carry mass (B is not diagonal for every μ)"
+    b = (Q.T @ MQ).diagonal()  # B = Q̃ᵀMQ̃ + P̃_μMQ̃, diagonal (friction_shift checked it), its second term 0
     Kt, Ct = (Q.T @ KQ).tocsr(), (Q.T @ CQ).tocsr()
     Kt, Ct = (0.5 * (Kt + Kt.T)).tocsr(), (0.5 * (Ct + Ct.T)).tocsr()  # symmetric by construction
     Mt = sp.diags(b).tocsr()
