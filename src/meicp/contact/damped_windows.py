@@ -25,7 +25,7 @@ completed as ``pᵀXr ≤ pᵀX_a r + (p − βr)ᵀ(X_a − X_b)(p − βr)/(4�
 a matrix polynomial 𝓜₀ + λ𝓜₁ + λ²𝓜₂: it is at least its chord less (λ_b − λ_a)²/4·λ_max(𝓜₂)⁺,
 and λ_min of the chord at least the smaller at the ends.  So ``λ_min 𝓜(λ_a)`` and
 ``λ_min 𝓜(λ_b)`` above ``(λ_b − λ_a)²/4·λ_max(𝓜₂)⁺`` and their rounding prove G(λ) ∈ R₀ on the
-window (sym(WG) ≻ 0 and xᵀWGx = Σ w_j x_j w_j = 0 for a solution).  Every block that needs,
+window (sym(WG) ≻ 0, while a solution has xᵀWGx = Σ W_jj x_j w_j = 0).  Every block that needs,
 ``Ξ(λ) = U X(λ) Uᵀ`` for ``U = [K̃_JF; C̃_JF; N_JF; N_C,JF]`` (4|J| rows), is one MUMPS Schur
 complement of the bordered ``[[H_FF(λ), Uᵀ], [U, 0]]`` per sample λ, its error measured by
 probes.  The windows cover [0, λ_max], λ_max the ceiling of every solution
