@@ -39,6 +39,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sl
@@ -50,6 +51,7 @@ from ..lattice.node_blocks import NodeBlocks, node_of
 from ..lcp.certificates import EPS, eig_rounding, norm2_bound, optimise_scaling
 from ..petsc.inertia import diagonal_scale, rounding_margin
 from ..petsc.schur import schur_series
+from .condensation import pieces_of
 from .condenser import InteriorSolve
 from .condenser_certificates import PROBE_SAFETY, SCHUR_ERROR_FLOOR, refined_solve
 from .damped_rayleigh import congruence_slack, friction_shift
@@ -91,7 +93,7 @@ class DampedPieces:
     slack: float
     nu: float
 
-    @property
+    @cached_property
     def F(self) -> np.ndarray:
         mask = np.ones(self.Kt.shape[0], dtype=bool)
         mask[self.J] = False
@@ -125,27 +127,21 @@ class DampedPieces:
         return 0.5 * (self.nu + np.sqrt(self.nu * self.nu + 4 * gamma)) * (1 + 1e-12)
 
 
-def damped_pieces(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = None
-                  ) -> tuple[DampedPieces | None, str]:
+def damped_pieces(pen) -> tuple[DampedPieces | None, str]:
     """``(pieces, "")`` of a damped pencil, or ``(None, why not)`` where the windows do not
     apply (B not diagonal, P̃₀ ≠ Q̃ᵀ, mass in the friction rows).  SciPy, every rank alike."""
     maps, lattice = pen.maps, pen.lattice
-    K, M_whole = lattice.whole()
-    M = M_whole if M is None else M
-    C = lattice.damping() if C is None else C
+    K, M = lattice.whole()
+    C = lattice.damping()
     nu, why = friction_shift(maps, C, M)  # None where B is not diagonal positive or P̃₀ ≠ Q̃ᵀ
     if nu is None:
         return None, why
-    Q = sp.csr_matrix(maps.Q)
-    Pmu = maps.friction_rows()
-    KQ, MQ, CQ = (K @ Q).tocsr(), (M @ Q).tocsr(), (C @ Q).tocsr()
-    if (Pmu @ MQ).count_nonzero():
+    stiffness = pieces_of(K, M, maps)  # K̃, M̃, N, N_M, as the undamped condensation splits them
+    viscous = pieces_of(C, M, maps)     # the same split of C: C̃ in K̃'s place, N_C in N's
+    if stiffness.NM.count_nonzero():
         return None, "the friction rows carry mass (B is not diagonal for every μ)"
-    b = (Q.T @ MQ).diagonal()  # B = Q̃ᵀMQ̃ + P̃_μMQ̃, diagonal (friction_shift checked it), its second term 0
-    Kt, Ct = (Q.T @ KQ).tocsr(), (Q.T @ CQ).tocsr()
-    Kt, Ct = (0.5 * (Kt + Kt.T)).tocsr(), (0.5 * (Ct + Ct.T)).tocsr()  # symmetric by construction
-    Mt = sp.diags(b).tocsr()
-    return DampedPieces(Kt, Ct, Mt, (Pmu @ KQ).tocsr(), (Pmu @ CQ).tocsr(), np.asarray(maps.J),
+    b = stiffness.Mt.diagonal()  # B = M̃ + N_M, diagonal (friction_shift checked it), N_M = 0
+    return DampedPieces(stiffness.Kt, viscous.Kt, sp.diags(b).tocsr(), stiffness.N, viscous.N, np.asarray(maps.J),
                         congruence_slack(maps, C, b), nu), ""
 
 
@@ -174,7 +170,8 @@ class DampedCondenser:
         self.U = U
         self.nF, self.nU = F.size, U.shape[0]
         zero_U = sp.csr_matrix((self.nU, self.nU))
-        parts = [sp.bmat([[pieces.H_FF(0.0), U.T], [U, zero_U]], format="csr")]
+        self.KFF = pieces.H_FF(0.0)
+        parts = [sp.bmat([[self.KFF, U.T], [U, zero_U]], format="csr")]
         for M in (pieces.Ct, pieces.Mt):
             MFF = M[F].tocsc()[:, F]
             parts.append(sp.bmat([[MFF, None], [None, zero_U]], format="csr"))
@@ -199,8 +196,7 @@ class DampedCondenser:
         rounding margin, D = diag|K̃_FF|), which also certifies τ = η·min(D/m) ≤
         λ_min(K̃_FF, M̃_FF); else why not.  Collective."""
         t = time.perf_counter()
-        KFF = self.pieces.H_FF(0.0)
-        eta, d = rounding_margin(self.nF), diagonal_scale(KFF)
+        eta, d = rounding_margin(self.nF), diagonal_scale(self.KFF)
         if not getattr(self.series, "interior", False):
             return "no DMUMPS with interior inertias loaded: the lattice is not proved held"
         shift = np.zeros(self.nF + self.nU)

@@ -379,7 +379,6 @@ def _unique(solutions: list) -> list:
     """One solution per (λ, x) (a solution found on two supports at the boundary)."""
     out = []
     for s in solutions:
-        if not any(abs(s.lam - o.lam) <= 1e-9 * max(1.0, abs(o.lam)) and
-                   min(np.linalg.norm(s.x - o.x), np.linalg.norm(s.x + o.x)) <= 1e-7 for o in out):
+        if not any(abs(s.lam - o.lam) <= 1e-9 * max(1.0, abs(o.lam)) and _same_mode(s, o, 1e-7) for o in out):
             out.append(s)
     return out

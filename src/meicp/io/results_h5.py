@@ -94,7 +94,7 @@ def _write_h5(h5py, path: Path, scene: Scene, result, prep: dict, text: str, ver
             "divergence_proofs": json.dumps(result.to_dict().get("proofs", []) if hasattr(result, "to_dict") else []),
             "n_flutter_modes": len(prep["flutter_modes"]),
             **_growth_attrs(getattr(result, "flutter_growth", None))})
-        f.create_dataset("scene", data=text, dtype=h5py.string_dtype("utf-8"))
+        f.create_dataset("scene", data=text, dtype=UTF8)
 
         g = f.create_group("scene_summary")
         b = scene.boundary
