@@ -97,9 +97,10 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
     comm = mpi_comm(comm)
     flutter = flutter_asked(scene, flutter)
     lattice, lines = _friction_states(scene)
-    divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm)
+    proportional = proportional_damping(lattice.model) if scene.damped else None
+    divergence = _divergence_onset(lattice, lines, mu_max, bisection, tol, comm,
+                                   damped=scene.damped and proportional is None)
     if scene.damped:
-        proportional = proportional_damping(lattice.model)
         why = DAMPED_DIVERGENCE if proportional is None else PROPORTIONAL_DIVERGENCE
         divergence = dataclasses.replace(divergence, evidence=f"{why} "
                                          f"({DampingUsed.of(scene).describe()}); {divergence.evidence}")
@@ -109,8 +110,11 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
                                                          options=dict(scene.petsc)))
 
 
-def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm) -> Onset:
-    """The divergence onset μ_c (:func:`critical_friction`'s docstring)."""
+def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: bool = False) -> Onset:
+    """The divergence onset μ_c (:func:`critical_friction`'s docstring).  ``damped``: damping
+    that is not proportional, so damped modes born at λ > 0 may start below μ_c: where the
+    quadratic cross-check did not look for them, the lower end is only what the damped
+    Rayleigh bound proves (:func:`_damped_floor`)."""
     K, M = lattice.K, lattice.M
     ends, evidence = [], []
     small, singular, enumerated = True, False, True
@@ -155,14 +159,34 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm) -> Onset:
             # divergence starts where they do, found by sampling μ; below, only the damped
             # Rayleigh bound, convex in μ, proves anything
             top = min(upper, born)
-            floor = min(divergence_free_up_to(lattice, lines, case, top) for case in grazing_cases(lines))
-            return Onset(floor, top, top - floor <= EXACT_WIDTH * top,
-                         text + f"; with damping these modes are divergence too: it starts at μ ≤ {top:.8g}; no damped "
-                                f"divergence mode of any λ ≥ 0 for μ in [0, {floor:.8g}] (the damped Rayleigh bound "
-                                "at both ends, convex in μ: a proof)")
-        return Onset(lower, upper, True, text)
+            return _damped_floor(lattice, lines, Onset(top, top, True, text + "; with damping these modes are "
+                                                       f"divergence too: it starts at μ ≤ {top:.8g}"))
+        onset = Onset(lower, upper, True, text)
+        checked = born is not None or bisection or (bisection is None and small)
+        return onset if checked or not damped else _damped_floor(lattice, lines, onset, UNCHECKED)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
-    return Onset(min(lower, upper), upper, exact, "; ".join(evidence))
+    onset = Onset(min(lower, upper), upper, exact, "; ".join(evidence))
+    return _damped_floor(lattice, lines, onset, UNCHECKED) if damped else onset
+
+
+#: why a damped lattice's λ = 0 onset is not its divergence onset when the cross-check did not run
+UNCHECKED = ("with damping, modes born at λ > 0 below the λ = 0 onset are divergence too, and the quadratic "
+             "cross-check did not run (too large)")
+
+
+def _damped_floor(lattice, lines, onset: Onset, why: str = "") -> Onset:
+    """``onset`` with its lower end cut to what the damped Rayleigh bound proves free of damped
+    divergence modes of any λ ≥ 0 (convex in μ: the bound at 0 and at the end proves the
+    interval; :func:`~..damped_rayleigh.divergence_free_up_to`)."""
+    top = min(onset.lower, onset.upper)
+    floor = min(divergence_free_up_to(lattice, lines, case, top) for case in grazing_cases(lines)) \
+        if np.isfinite(top) else 0.0
+    lower = min(onset.lower, floor)
+    text = (f"{onset.evidence}; {why + '; ' if why else ''}no damped divergence mode of any λ ≥ 0 for μ in "
+            f"[0, {floor:.8g}] (the damped Rayleigh bound at both ends, convex in μ: a proof)")
+    exact = onset.exact if lower == onset.lower else bool(np.isfinite(onset.upper)
+                                                          and onset.upper - lower <= EXACT_WIDTH * onset.upper)
+    return Onset(lower, onset.upper, exact, text)
 
 
 #: the loosest bisection tolerance: a relative width in μ
