@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 import meicp
 from meicp.contact import damped as damped_module
-from meicp.contact.damped_windows import (DampedPieces, Sample, _ordering_spread, damped_pieces,
+from meicp.contact.damped_windows import (DampedPieces, Sample, ordering_spread, damped_pieces,
                                           prove_no_damped_divergence, window_margin)
 from meicp.contact.problem import pencil
 from meicp.eicp.quadratic import solve_quadratic_eicp
@@ -151,8 +151,8 @@ def test_the_window_bound_holds_between_its_ends():
 
 def test_the_ordering_spread_is_zero_away_from_zero_and_tiny_at_it():
     pieces = DampedPieces(*([None] * 5), J=np.arange(1), slack=1e-15, nu=0.0)
-    assert _ordering_spread(pieces, 1e-6, 0.1, 0.5) == 0.0
-    assert 0 < _ordering_spread(pieces, 1e-6, 0.0, 0.5) <= 1e-9
-    assert _ordering_spread(pieces, 0.0, 0.0, 0.5) == np.inf
+    assert ordering_spread(pieces, 1e-6, 0.1, 0.5) == 0.0
+    assert 0 < ordering_spread(pieces, 1e-6, 0.0, 0.5) <= 1e-9
+    assert ordering_spread(pieces, 0.0, 0.0, 0.5) == np.inf
     assert window_margin([np.eye(1)] * 3, Sample(0.0, np.zeros((4, 4)), 0.0), Sample(1.0, np.zeros((4, 4)), 0.0),
                          np.ones(1), np.inf)[0] == -np.inf

@@ -116,15 +116,22 @@ class DampedPieces:
 
     def ceiling(self) -> float:
         """λ_max: no solution has λ above it.  A solution has ``λ²·xᵀBx + λ·xᵀDx − xᵀAx = 0``
-        (xᵀw = 0), with sym(D) ⪰ −νB and sym(A) ⪯ γB (Gershgorin's discs of
-        B^-½ sym(A) B^-½, rounded up), so ``λ² − νλ − γ ≤ 0``."""
+        (xᵀw = 0), with sym(D) ⪰ −νB and sym(A) ⪯ γB (:meth:`gamma`), so ``λ² − νλ − γ ≤ 0``."""
+        return ceiling_of(self.nu, self.gamma())
+
+    def gamma(self) -> float:
+        """γ ≥ 0 with sym(A) ⪯ γB: Gershgorin's discs of B^-½ sym(A) B^-½, rounded up."""
         s = 1.0 / np.sqrt(self.Mt.diagonal())
         S = sp.diags(s) @ (-0.5 * ((self.Kt + self.N) + (self.Kt + self.N).T)) @ sp.diags(s)
         S = sp.csr_matrix(S)
         radius = np.asarray(abs(S).sum(axis=1)).ravel() - np.abs(S.diagonal())
         gamma = float(np.max(S.diagonal() + radius)) * (1 + 1e-12) + 16 * EPS * float(abs(S).max())
-        gamma = max(gamma, 0.0)
-        return 0.5 * (self.nu + np.sqrt(self.nu * self.nu + 4 * gamma)) * (1 + 1e-12)
+        return max(gamma, 0.0)
+
+
+def ceiling_of(nu: float, gamma: float) -> float:
+    """The largest root of ``λ² − νλ − γ``, rounded up: it grows with ν and with γ."""
+    return 0.5 * (nu + np.sqrt(nu * nu + 4 * gamma)) * (1 + 1e-12)
 
 
 def damped_pieces(pen) -> tuple[DampedPieces | None, str]:
@@ -261,7 +268,7 @@ class NothingToCondense:
 def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float):
     """``(𝓜₀, 𝓜₁, 𝓜₂)`` of the window [a.lam, b.lam] (module docstring) and the coefficients
     ``(e₀, e₁, e₂)`` bounding the 2-norm of their error.  ``spread`` κρ ≥ 0: X_a, X_b widened to
-    X_a/(1 − κρ), X_b/(1 + κρ) for the rounding of C̃ ⪰ 0 (:func:`_ordering_spread`)."""
+    X_a/(1 − κρ), X_b/(1 + κρ) for the rounding of C̃ ⪰ 0 (:func:`ordering_spread`)."""
     up, down = 1.0 / (1.0 - spread), 1.0 / (1.0 + spread)
     M = [np.array(H, dtype=float) for H in pieces_JJ]
     err = [0.0, 0.0, 0.0]
@@ -287,7 +294,7 @@ def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spr
     return M, err
 
 
-def _ordering_spread(pieces: DampedPieces, tau: float, lo: float, hi: float) -> float:
+def ordering_spread(pieces: DampedPieces, tau: float, lo: float, hi: float) -> float:
     """κρ with X(λ) ⪯ X_a/(1 − κρ) and X(λ) ⪰ X_b/(1 + κρ) on [lo, hi]: H_FF(λ) − H_FF(λ_a) =
     (λ − λ_a)(C̃ + (λ + λ_a)M̃) ⪰ −ρM̃ with ρ = (hi − lo)·max(0, s − 2lo) (C̃ ⪰ −sM̃), and
     M̃ ⪯ H_FF/τ (H_FF ⪰ K̃_FF ⪰ τM̃)."""
@@ -300,29 +307,40 @@ def window_margin(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, spread: float,
                   ) -> tuple[float, float]:
     """The certified margin of the window [a.lam, b.lam] for the scaling w (> 0 proves it, in
     units of mean(w)) and the β that gave it: the best over :data:`BETAS`."""
+    return window_margin_over([(pieces_JJ, a, b)], w, spread, tol)
+
+
+def window_margin_over(ends: list, w: np.ndarray, spread: float, tol: float = 0.0) -> tuple[float, float]:
+    """:func:`window_margin` for one scaling and one β at several ``ends`` — ``(pieces_JJ, a, b)``
+    of one window at several μ (:mod:`.damped_mu_windows`) — the smallest margin of the ends."""
     if not spread < 1:
         return -np.inf, np.nan
-    width = b.lam - a.lam
     best = (-np.inf, np.nan)
     for f in BETAS:
         beta = f * float(np.mean(w))
-        (M0, M1, M2), (e0, e1, e2) = _polynomial(pieces_JJ, a, b, w, beta, spread)
-        ends = []
-        for lam in (a.lam, b.lam):
-            X = M0 + lam * M1 + (lam * lam) * M2
-            lo = float(sl.eigh(X, eigvals_only=True, subset_by_index=[0, 0])[0])
-            ends.append(lo - eig_rounding(X) - tol * norm2_bound(X))
-        top = float(sl.eigh(M2, eigvals_only=True, subset_by_index=[M2.shape[0] - 1, M2.shape[0] - 1])[0])
-        curve = 0.25 * width * width * (max(top, 0.0) + eig_rounding(M2))
-        # the blocks' error, at its largest over the window (λ ≥ 0), and the sums' own rounding
-        error = e0 + b.lam * e1 + b.lam * b.lam * e2
-        error += FORMING_ROUNDING * (norm2_bound(M0) + b.lam * norm2_bound(M1) + b.lam * b.lam * norm2_bound(M2))
-        margin = (min(ends) - curve - error) / float(np.mean(w))
+        margin = min(_margin(pieces_JJ, a, b, w, beta, spread, tol) for pieces_JJ, a, b in ends)
         if margin > best[0]:
             best = (margin, beta)
         if margin > 0:
             break
     return best
+
+
+def _margin(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float, tol: float) -> float:
+    """The certified margin of the window [a.lam, b.lam] for the scaling w and β."""
+    width = b.lam - a.lam
+    (M0, M1, M2), (e0, e1, e2) = _polynomial(pieces_JJ, a, b, w, beta, spread)
+    ends = []
+    for lam in (a.lam, b.lam):
+        X = M0 + lam * M1 + (lam * lam) * M2
+        lo = float(sl.eigh(X, eigvals_only=True, subset_by_index=[0, 0])[0])
+        ends.append(lo - eig_rounding(X) - tol * norm2_bound(X))
+    top = float(sl.eigh(M2, eigvals_only=True, subset_by_index=[M2.shape[0] - 1, M2.shape[0] - 1])[0])
+    curve = 0.25 * width * width * (max(top, 0.0) + eig_rounding(M2))
+    # the blocks' error, at its largest over the window (λ ≥ 0), and the sums' own rounding
+    error = e0 + b.lam * e1 + b.lam * b.lam * e2
+    error += FORMING_ROUNDING * (norm2_bound(M0) + b.lam * norm2_bound(M1) + b.lam * b.lam * norm2_bound(M2))
+    return (min(ends) - curve - error) / float(np.mean(w))
 
 
 def G_at(pieces_JJ, s: Sample) -> np.ndarray:
@@ -348,11 +366,18 @@ class DampedWindows:
     seconds: dict = field(default_factory=dict)
 
 
-def _cover(condense_at, pieces_JJ, tau: float, pieces: DampedPieces, lam_max: float, tol: float,
-           max_samples: int) -> tuple[bool, list, dict, tuple | None]:
-    """Rank 0: windows from 0 to λ_max, a failed one split in log(λ + scale)."""
+def cover_windows(condense_at, pieces_JJ, tau: float, pieces: DampedPieces, lam_max: float, tol: float,
+           max_samples: int, *, pending: list | None = None, condensed=None, hints: dict | None = None,
+           used: dict | None = None) -> tuple[bool, list, dict, tuple | None]:
+    """Rank 0: windows from 0 to λ_max, a failed one split in log(λ + scale).  ``pending``: the
+    windows to try first (default [0, λ_max]; they must cover it from 0); ``condensed()``: the
+    condensations made so far, for the budget (default this call's); ``hints``: a scaling per
+    window's λ_a to try before optimising one; ``used``: filled with the scaling that proved
+    each window."""
     samples: dict = {}
     scalings: dict = {}
+    hints = {} if hints is None else hints
+    condensed = condensed or (lambda: len(samples))
 
     def at(lam):
         if lam not in samples:
@@ -360,28 +385,33 @@ def _cover(condense_at, pieces_JJ, tau: float, pieces: DampedPieces, lam_max: fl
         return samples[lam]
 
     scale = SPLIT_SCALE * lam_max
-    pending, proved = [(0.0, lam_max)], []
+    pending, proved = list(pending or [(0.0, lam_max)]), []
     ticker = Ticker("damped λ-windows", interval=0.0)
     while pending:
         lo, hi = pending.pop(0)
         a, b = at(lo), at(hi)
-        spread = _ordering_spread(pieces, tau, lo, hi)
-        margin = -np.inf
-        if lo not in scalings and scalings:
-            # the scaling optimised at λ = 0 often proves a window as it is: the 40 eigen-solves
-            # of an optimised one only when it does not
-            margin, _ = window_margin(pieces_JJ, a, b, scalings[0.0], spread, tol)
+        spread = ordering_spread(pieces, tau, lo, hi)
+        margin, w = -np.inf, None
+        # a scaling given, or the one optimised at λ = 0, often proves a window as it is: the 40
+        # eigen-solves of an optimised one only when it does not
+        for tried in (hints.get(lo), scalings.get(0.0) if lo not in scalings else None):
+            if tried is not None and margin <= 0:
+                margin, w = window_margin(pieces_JJ, a, b, tried, spread, tol)[0], tried
         if margin <= 0:
             if lo not in scalings:
-                scalings[lo], _ = optimise_scaling([G_at(pieces_JJ, a)], d0=scalings.get(0.0), iters=40)
-            margin, _ = window_margin(pieces_JJ, a, b, scalings[lo], spread, tol)
+                scalings[lo], _ = optimise_scaling([G_at(pieces_JJ, a)], d0=hints.get(lo, scalings.get(0.0)),
+                                                   iters=40)
+            w = scalings[lo]
+            margin, _ = window_margin(pieces_JJ, a, b, w, spread, tol)
         ticker.say(lambda: f"window [{lo:.4g}, {hi:.4g}] {'proved' if margin > 0 else 'split'}; "
-                           f"{len(proved) + (margin > 0)} proved, {len(samples)} condensation(s)")
+                           f"{len(proved) + (margin > 0)} proved, {condensed()} condensation(s)")
         if margin > 0:
             proved.append((lo, hi, margin))
+            if used is not None:
+                used[lo] = w
             continue
         mid = float(np.sqrt((lo + scale) * (hi + scale)) - scale)
-        if len(samples) >= max_samples or not lo < mid < hi:
+        if condensed() >= max_samples or not lo < mid < hi:
             return False, proved, samples, (lo, hi, margin)
         pending[:0] = [(lo, mid), (mid, hi)]
     return True, proved, samples, None
@@ -408,7 +438,7 @@ def prove_no_damped_divergence(pen, comm=None, *, tol: float = 1e-10, max_sample
             return DampedWindows(False, f"condensed λ-windows: {why}", lam_max=lam_max, seconds=dict(cond.seconds))
         pieces_JJ = pieces.H_JJ()
         proved, windows, samples, failed = decided_on_root(
-            comm, lambda served: _summary(*_cover(served, pieces_JJ, cond.tau, pieces, lam_max, tol, max_samples)),
+            comm, lambda served: _summary(*cover_windows(served, pieces_JJ, cond.tau, pieces, lam_max, tol, max_samples)),
             cond.at)
         seconds = {**cond.seconds, "total": time.perf_counter() - t0}
     n = len(samples)

@@ -22,10 +22,11 @@ from ...petsc.assembly import LatticeMatrices
 from ...scene import Scene
 from ..damped import DampingUsed
 from ..damped_proportional import proportional_damping
+from ..damped_mu_windows import prove_up_to
 from ..damped_rayleigh import divergence_free_up_to
 from ..divergence import enumeration_is_small
 from ..maps import grazing_cases, reduced_system
-from ..problem import contact_states
+from ..problem import contact_states, pencil_of
 from .bisection import check_by_bisection
 from .bracket import bracket
 from .enumerated import condense_in_mu, friction_pencil, singular_message, smallest_mu
@@ -113,8 +114,8 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
 def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: bool = False) -> Onset:
     """The divergence onset μ_c (:func:`critical_friction`'s docstring).  ``damped``: damping
     that is not proportional, so damped modes born at λ > 0 may start below μ_c: where the
-    quadratic cross-check did not look for them, the lower end is only what the damped
-    Rayleigh bound proves (:func:`_damped_floor`)."""
+    quadratic cross-check did not look for them, the lower end is only what is proved free of
+    them (:func:`_damped_floor`)."""
     K, M = lattice.K, lattice.M
     ends, evidence = [], []
     small, singular, enumerated = True, False, True
@@ -156,17 +157,17 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: b
                  ", the smallest μ certified on the whole reduced lattice") + note)
         if born is not None and lattice.model.damped:
             # damped modes below the λ = 0 onset (ξᵀDx < 0 moves the λ = 0 mode below μ_c): the
-            # divergence starts where they do, found by sampling μ; below, only the damped
-            # Rayleigh bound, convex in μ, proves anything
+            # divergence starts where they do, found by sampling μ; below, the damped Rayleigh
+            # bound and the λ-windows over μ prove what they can
             top = min(upper, born)
             return _damped_floor(lattice, lines, Onset(top, top, True, text + "; with damping these modes are "
-                                                       f"divergence too: it starts at μ ≤ {top:.8g}"))
+                                                       f"divergence too: it starts at μ ≤ {top:.8g}"), comm=comm)
         onset = Onset(lower, upper, True, text)
         checked = born is not None or bisection or (bisection is None and small)
-        return onset if checked or not damped else _damped_floor(lattice, lines, onset, UNCHECKED)
+        return onset if checked or not damped else _damped_floor(lattice, lines, onset, UNCHECKED, comm)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
     onset = Onset(min(lower, upper), upper, exact, "; ".join(evidence))
-    return _damped_floor(lattice, lines, onset, UNCHECKED) if damped else onset
+    return _damped_floor(lattice, lines, onset, UNCHECKED, comm) if damped else onset
 
 
 #: why a damped lattice's λ = 0 onset is not its divergence onset when the cross-check did not run
@@ -174,19 +175,32 @@ UNCHECKED = ("with damping, modes born at λ > 0 below the λ = 0 onset are dive
              "cross-check did not run (too large)")
 
 
-def _damped_floor(lattice, lines, onset: Onset, why: str = "") -> Onset:
-    """``onset`` with its lower end cut to what the damped Rayleigh bound proves free of damped
-    divergence modes of any λ ≥ 0 (convex in μ: the bound at 0 and at the end proves the
-    interval; :func:`~..damped_rayleigh.divergence_free_up_to`)."""
+def _damped_floor(lattice, lines, onset: Onset, why: str = "", comm=None) -> Onset:
+    """``onset`` with its lower end cut to what is proved free of damped divergence modes of any
+    λ ≥ 0: the damped Rayleigh bound (convex in μ: the bound at 0 and at m proves [0, m];
+    :func:`~..damped_rayleigh.divergence_free_up_to`), then condensed λ-windows carried over μ
+    from there (:mod:`..damped_mu_windows`), per grazing case.  Collective on ``comm``."""
     top = min(onset.lower, onset.upper)
-    floor = min(divergence_free_up_to(lattice, lines, case, top) for case in grazing_cases(lines)) \
-        if np.isfinite(top) else 0.0
+    floors = [_case_floor(lattice, lines, case, top, comm) if np.isfinite(top) else (0.0, "")
+              for case in grazing_cases(lines)]
+    floor = min(f for f, _ in floors)
     lower = min(onset.lower, floor)
     text = (f"{onset.evidence}; {why + '; ' if why else ''}no damped divergence mode of any λ ≥ 0 for μ in "
-            f"[0, {floor:.8g}] (the damped Rayleigh bound at both ends, convex in μ: a proof)")
+            f"[0, {floor:.8g}]: " + "; ".join(t for _, t in floors))
     exact = onset.exact if lower == onset.lower else bool(np.isfinite(onset.upper)
                                                           and onset.upper - lower <= EXACT_WIDTH * onset.upper)
     return Onset(lower, onset.upper, exact, text)
+
+
+def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
+    """``(m, how)``: no damped divergence mode of one grazing case at any μ in [0, m], m ≤ top."""
+    floor = divergence_free_up_to(lattice, lines, case, top)
+    text = f"[0, {floor:.8g}] by the damped Rayleigh bound at both ends (convex in μ: a proof)"
+    if floor >= top:
+        return floor, text
+    with pencil_of(lattice, lines, case, maps=reduced_system(lattice.model, lines, case).with_friction(1.0)) as unit:
+        cover = prove_up_to(unit, floor, top, comm)
+    return (cover.reach, f"{text}; {cover.statement}") if cover.reach > floor else (floor, text)
 
 
 #: the loosest bisection tolerance: a relative width in μ
