@@ -180,3 +180,23 @@ def test_the_condensed_lambda_windows_on_two_ranks(comm):
         one = prove_no_damped_divergence(pen, MPI.COMM_SELF)
     assert two.proved and one.proved
     assert [w[:2] for w in two.windows] == [w[:2] for w in one.windows]
+
+
+def test_the_lambda_windows_over_mu_on_two_ranks(comm):
+    """The λ-windows carried over μ (one MUMPS Schur series over both ranks, the μ intervals on
+    rank 0) reach what they reach on one rank, below the first damped mode (6.7053–6.7063,
+    tests/test_damped_mu_windows.py), the same on every rank."""
+    from mpi4py import MPI
+
+    from meicp.contact.damped_mu_windows import prove_up_to
+    from meicp.contact.problem import pencil
+
+    from .test_damped_mu_windows import SIX
+
+    reach = {}
+    for name, c in (("two", comm), ("one", MPI.COMM_SELF)):
+        with pencil(SIX.with_friction(1.0), comm=c) as unit:
+            reach[name] = prove_up_to(unit, 2.357, 6.7082039, c).reach
+    assert 6.69 < reach["two"] < 6.7053 and 6.69 < reach["one"] < 6.7053
+    assert reach["two"] == pytest.approx(reach["one"], rel=1e-3)
+    assert comm.allgather(reach["two"]) == [reach["two"]] * comm.size
