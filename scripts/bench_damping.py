@@ -8,6 +8,7 @@ lowers it (frictional interface: the destabilisation paradox).
     .venv/bin/python scripts/bench_damping.py onsets   # -> damping_onsets.csv
     .venv/bin/python scripts/bench_damping.py chart    # -> damping_growth.png
     .venv/bin/python scripts/bench_damping.py scale --lock LOCK   # -> damping_scale.csv, .png
+    mpirun -n 2 .venv/bin/python scripts/bench_damping.py floor   # -> damping_floor.csv, .png
 
 Scenes (the dense damped references, where every answer is a proof or a certified mode):
 ``data/scenes/two_layers.toml`` (every base node slip+) and the 6 × 4 frictional interface
@@ -23,6 +24,11 @@ narrower than 10⁻⁶·μ; a shaded band: a bracket that is not).
 ``free``: the damped flutter-free proof at 10⁵ and 10⁶ DOFs (docs/damping.md, "damped
 flutter-free proof"): a shallow two-layer lattice with mass damping at small μ, where
 STABLE — both verdicts proved — is possible past the dense limit (damping_free.csv, .png).
+
+``floor``: the damped divergence onset's lower end where the quadratic cross-check does not
+run (docs/critical-friction.md, "With damping"): the λ = 0 onset μ_c, what the damped
+Rayleigh bound proves, and how far the condensed λ-windows carried over μ take it, on
+frictional interfaces and base contacts from 22 pairs to 10⁵ DOFs, on the ranks it runs on.
 
 ``scale --relaxation τ``: the same with η = τ·k in every layer — damping proportional to
 stiffness, where the damped divergence is the undamped MEiCP's (docs/damping.md,
@@ -58,6 +64,17 @@ FIELDS = ["scene", "eta", "mu", "divergence", "divergence_growth", "flutter", "f
           "flutter_exact", "seconds"]
 #: viscosities of the two layers: none, equal, a viscous base layer under a less viscous one
 ETAS = {"0": (0.0, 0.0), "0.02 / 0.02": (0.02, 0.02), "0.1 / 0.01": (0.1, 0.01)}
+FLOOR_FIELDS = ["scene", "dofs", "pairs", "eta", "mu_c", "rayleigh_floor", "lower", "gap", "seconds", "ranks", "date",
+                "commit"]
+#: (label, scene, η of the two layers) of ``floor``
+FLOOR_SCENES = [
+    ("22 × 4 interface", dict(nx=22, rows=(2, 2), bottom="fixed", stiffness=(2.0, 1.0), density=(1.0, 1.0),
+                              interface={"kind": "frictional", "friction": 1.0, "states": "slip+"}), (0.1, 0.01)),
+    ("100 × 8 interface", dict(nx=100, rows=(4, 4), bottom="fixed", stiffness=(1.0, 4.0), density=(1.0, 2.0),
+                               interface={"kind": "frictional", "friction": 1.0, "states": "slip+"}), (0.02, 0.02)),
+    ("100 × 50 base", dict(nx=100, rows=(25, 25), mu=1.0, states="slip+", shear=0.3), (0.02, 0.02)),
+    ("316 × 158 base", dict(nx=316, rows=(79, 79), mu=1.0, states="slip+", shear=0.3), (0.02, 0.02)),
+]
 ONSET_FIELDS = ["scene", "eta", "flutter_lower", "flutter_upper", "flutter_exact", "divergence_lower",
                 "divergence_upper", "divergence_exact", "first", "seconds", "commit"]
 
@@ -118,6 +135,56 @@ def onsets(args) -> None:
                          "seconds": f"{time.perf_counter() - t0:.2f}", "commit": git_commit()})
             print(rows[-1], flush=True)
     write_rows(csv_path("damping_onsets"), rows, ONSET_FIELDS, keep=lambda row: False)
+
+
+def floor(args) -> None:
+    import re
+    import time
+    from datetime import date
+
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    rows = []
+    for label, kw, eta in FLOOR_SCENES:
+        scene = with_viscosity(two_layer_scene(**kw), eta)
+        t0 = time.perf_counter()
+        d = meicp.critical_friction(scene, flutter=False, comm=comm).divergence
+        seconds = time.perf_counter() - t0
+        rayleigh = re.search(r"\[0, ([0-9.e+-]+)\] by the damped Rayleigh bound", d.evidence)
+        model = LatticeModel(scene)
+        rows.append({"scene": label, "dofs": model.n_dofs, "pairs": kw["nx"], "eta": " / ".join(map(str, eta)),
+                     "mu_c": f"{d.upper:.10g}", "rayleigh_floor": rayleigh.group(1) if rayleigh else "",
+                     "lower": f"{d.lower:.10g}", "gap": f"{(d.upper - d.lower) / d.upper:.4f}",
+                     "seconds": f"{seconds:.1f}", "ranks": comm.Get_size(), "date": date.today().isoformat(),
+                     "commit": git_commit()})
+        if comm.Get_rank() == 0:
+            print(rows[-1], flush=True)
+    if comm.Get_rank() == 0:
+        path = csv_path("damping_floor")
+        write_rows(path, rows, FLOOR_FIELDS, keep=lambda row: False)
+        floor_chart(rows, path.with_suffix(".png"))
+
+
+def floor_chart(rows, path=None) -> None:
+    """``rows`` of ``floor`` (an argparse namespace: read them from damping_floor.csv)."""
+    import matplotlib.pyplot as plt
+
+    if not isinstance(rows, list):
+        rows = read_rows(csv_path("damping_floor"))
+    path = path or csv_path("damping_floor").with_suffix(".png")
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    y = np.arange(len(rows))
+    ax.barh(y + 0.2, [float(r["lower"]) for r in rows], 0.4, label="proved with the λ-windows over μ")
+    ax.barh(y - 0.2, [float(r["rayleigh_floor"] or 0) for r in rows], 0.4, label="by the damped Rayleigh bound alone")
+    finite = [(k, float(r["mu_c"])) for k, r in enumerate(rows) if np.isfinite(float(r["mu_c"]))]
+    ax.plot([m for _, m in finite], [k for k, _ in finite], "k|", ms=22, mew=2,
+            label="λ = 0 onset μ_c (the upper end; none found on the last)")
+    ax.set_yticks(y, [f"{r['scene']}\n{int(r['dofs']):,} DOFs, η {r['eta']}" for r in rows], fontsize=7)
+    ax.set_xlabel("μ: no damped divergence mode of any λ ≥ 0 below the bar's end (a proof)")
+    ax.set_title("damped divergence onset past the enumeration: the proved lower end", fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    save_figure(fig, path)
 
 
 def _growth(rows, verdict: str, value: str) -> np.ndarray:
@@ -354,6 +421,8 @@ def main() -> None:
     r.add_argument("--mu-max", type=float, default=3.0)
     r.add_argument("--points", type=int, default=60)
     sub.add_parser("onsets")
+    sub.add_parser("floor")
+    sub.add_parser("floor_chart")
     sub.add_parser("chart")
     c = sub.add_parser("scale")
     c.add_argument("--scenes", nargs="+", default=["extensive_interface", "extensive_contact"],
