@@ -42,7 +42,7 @@ MAX_SECONDS = 60.0
 #: halved instead: near a damped divergence onset the windows need splitting, away from it not)
 NEW_PER_INTERVAL = 2
 #: the condensations the whole cover may make
-MAX_CONDENSATIONS = 32
+MAX_CONDENSATIONS = 64
 #: the narrowest μ interval tried, relative to the top: the cover stops at one that fails
 MIN_WIDTH = 1e-4
 #: the first friction block of Ξ (K̃_JF, C̃_JF, N₁_JF, N_C1,JF)
@@ -102,7 +102,7 @@ def prove_up_to(pen1, start: float, top: float, comm=None, *, tol: float = 1e-10
                                 seconds)
 
         reach, intervals, made, stop = decided_on_root(comm, decide, cond.at)
-    text = (f"condensed λ-windows carried over μ: no damped divergence mode for μ in [{start:.8g}, {reach:.8g}] "
+    text = (f"condensed λ-windows carried over μ: no divergence mode of any λ ≥ 0 for μ in [{start:.8g}, {reach:.8g}] "
             f"({intervals} μ interval(s) on {made} condensation(s), windows over [0, {lam_max:.6g}], each proved at both "
             f"ends of its μ interval with one scaling: the bound is concave in μ; Schur complements by MUMPS, error "
             f"measured: a measurement, not a bound){'; ' + stop if stop else ''}")

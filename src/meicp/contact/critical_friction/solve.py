@@ -193,7 +193,7 @@ def _damped_floor(lattice, lines, onset: Onset, why: str = "", comm=None) -> Ons
 
 
 def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
-    """``(m, how)``: no damped divergence mode of one grazing case at any μ in [0, m], m ≤ top."""
+    """``(m, how)``: no damped divergence mode (any λ ≥ 0) of one grazing case at any μ in [0, m], m ≤ top."""
     floor = divergence_free_up_to(lattice, lines, case, top)
     text = f"[0, {floor:.8g}] by the damped Rayleigh bound at both ends (convex in μ: a proof)"
     if floor >= top:
