@@ -265,10 +265,41 @@ class NothingToCondense:
         return Sample(float(lam), np.zeros((self.nU, self.nU)), 0.0)
 
 
-def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float):
-    """``(𝓜₀, 𝓜₁, 𝓜₂)`` of the window [a.lam, b.lam] (module docstring) and the coefficients
-    ``(e₀, e₁, e₂)`` bounding the 2-norm of their error.  ``spread`` κρ ≥ 0: X_a, X_b widened to
-    X_a/(1 − κρ), X_b/(1 + κρ) for the rounding of C̃ ⪰ 0 (:func:`ordering_spread`)."""
+@dataclass
+class WindowParts:
+    """What a window's bound is made of for one scaling w, before β is chosen: 𝓜(β) =
+    ``base − Q₀/(4β) + Q₁/4 − β·Q₂/4`` per power of λ (:func:`window_parts`), and the errors."""
+
+    base: list
+    Q0: list
+    Q1: list
+    Q2: list
+    base_error: list
+    delta_error: float
+    w: np.ndarray
+
+    def at(self, beta: float) -> tuple[list, list]:
+        """``(𝓜₀, 𝓜₁, 𝓜₂)`` at β and bounds of their errors: the blocks' (as charged), and the
+        rounding of this combination, relative to its terms."""
+        coeff_max = {True: float(np.abs(self.w - beta).max()), False: float(self.w.max())}
+        M, err = [], list(self.base_error)
+        for k in range(3):
+            M.append(self.base[k] - self.Q0[k] / (4 * beta) + 0.25 * self.Q1[k] - (0.25 * beta) * self.Q2[k])
+            err[k] += FORMING_ROUNDING * (norm2_bound(self.Q0[k]) / (4 * beta) + 0.25 * norm2_bound(self.Q1[k])
+                                          + 0.25 * beta * norm2_bound(self.Q2[k]))
+        for i in range(4):
+            for j in range(4):
+                err[POWER[i] + POWER[j]] += (coeff_max[SYMMETRIC[i]] * coeff_max[SYMMETRIC[j]] * self.delta_error
+                                             / (4 * beta))
+        return M, err
+
+
+def window_parts(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, spread: float) -> WindowParts:
+    """The β-free parts of the window [a.lam, b.lam]'s bound for the scaling w (module
+    docstring).  With ``Π = (W − βS)a' + …`` (S: 1 on a's blocks, 0 on b's) each
+    ``Π_i Δ_ij Π_jᵀ/(4β)`` is ``wΔw/(4β) − (s_iΔw + s_j wΔ)/4 + β s_i s_j Δ/4``; ``spread`` κρ ≥ 0:
+    X_a, X_b widened to X_a/(1 − κρ), X_b/(1 + κρ) for the rounding of C̃ ⪰ 0
+    (:func:`ordering_spread`)."""
     up, down = 1.0 / (1.0 - spread), 1.0 / (1.0 + spread)
     M = [np.array(H, dtype=float) for H in pieces_JJ]
     err = [0.0, 0.0, 0.0]
@@ -280,18 +311,28 @@ def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spr
             M[k] -= up * a.block(i, j)
             err[k] += wmax * up * (a.error)
     M = [w[:, None] * Mk for Mk in M]
-    M = [0.5 * (Mk + Mk.T) for Mk in M]
-    # Π(λ)ΔΠ(λ)ᵀ/(4β), Π = (W − β)a + W b, Δ = X_a − X_b
-    coeff = [w - beta if SYMMETRIC[i] else w for i in range(4)]
-    cmax = [float(np.abs(c).max()) for c in coeff]
+    base = [0.5 * (Mk + Mk.T) for Mk in M]
+    n = w.size
+    Q0, Q1, Q2 = ([np.zeros((n, n)) for _ in range(3)] for _ in range(3))
     for i in range(4):
         for j in range(4):
             k = POWER[i] + POWER[j]
             delta = up * a.block(i, j) - down * b.block(i, j)
-            T = coeff[i][:, None] * delta * coeff[j][None, :] / (4 * beta)
-            M[k] -= 0.5 * (T + T.T)
-            err[k] += cmax[i] * cmax[j] * (up * a.error + down * b.error) / (4 * beta)
-    return M, err
+            Q0[k] += w[:, None] * delta * w[None, :]
+            if SYMMETRIC[i]:
+                Q1[k] += delta * w[None, :]
+            if SYMMETRIC[j]:
+                Q1[k] += w[:, None] * delta
+            if SYMMETRIC[i] and SYMMETRIC[j]:
+                Q2[k] += delta
+    Q0, Q1, Q2 = ([0.5 * (Q + Q.T) for Q in part] for part in (Q0, Q1, Q2))
+    return WindowParts(base, Q0, Q1, Q2, err, up * a.error + down * b.error, w)
+
+
+def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float):
+    """``(𝓜₀, 𝓜₁, 𝓜₂)`` of the window [a.lam, b.lam] at β and the coefficients ``(e₀, e₁, e₂)``
+    bounding the 2-norm of their error (:func:`window_parts`)."""
+    return window_parts(pieces_JJ, a, b, w, spread).at(beta)
 
 
 def ordering_spread(pieces: DampedPieces, tau: float, lo: float, hi: float) -> float:
@@ -315,10 +356,11 @@ def window_margin_over(ends: list, w: np.ndarray, spread: float, tol: float = 0.
     of one window at several μ (:mod:`.damped_mu_windows`) — the smallest margin of the ends."""
     if not spread < 1:
         return -np.inf, np.nan
+    parts = [(window_parts(pieces_JJ, a, b, w, spread), a.lam, b.lam) for pieces_JJ, a, b in ends]
     best = (-np.inf, np.nan)
     for f in BETAS:
         beta = f * float(np.mean(w))
-        margin = min(_margin(pieces_JJ, a, b, w, beta, spread, tol) for pieces_JJ, a, b in ends)
+        margin = min(_margin(part.at(beta), lo, hi, w, tol) for part, lo, hi in parts)
         if margin > best[0]:
             best = (margin, beta)
         if margin > 0:
@@ -326,21 +368,23 @@ def window_margin_over(ends: list, w: np.ndarray, spread: float, tol: float = 0.
     return best
 
 
-def _margin(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float, tol: float) -> float:
-    """The certified margin of the window [a.lam, b.lam] for the scaling w and β."""
-    width = b.lam - a.lam
-    (M0, M1, M2), (e0, e1, e2) = _polynomial(pieces_JJ, a, b, w, beta, spread)
-    ends = []
-    for lam in (a.lam, b.lam):
-        X = M0 + lam * M1 + (lam * lam) * M2
-        lo = float(sl.eigh(X, eigvals_only=True, subset_by_index=[0, 0])[0])
-        ends.append(lo - eig_rounding(X) - tol * norm2_bound(X))
-    top = float(sl.eigh(M2, eigvals_only=True, subset_by_index=[M2.shape[0] - 1, M2.shape[0] - 1])[0])
-    curve = 0.25 * width * width * (max(top, 0.0) + eig_rounding(M2))
+def _margin(polynomial, lo: float, hi: float, w: np.ndarray, tol: float) -> float:
+    """The certified margin of the window [lo, hi] from its bound ``((𝓜₀, 𝓜₁, 𝓜₂), errors)``."""
+    (M0, M1, M2), (e0, e1, e2) = polynomial
     # the blocks' error, at its largest over the window (λ ≥ 0), and the sums' own rounding
-    error = e0 + b.lam * e1 + b.lam * b.lam * e2
-    error += FORMING_ROUNDING * (norm2_bound(M0) + b.lam * norm2_bound(M1) + b.lam * b.lam * norm2_bound(M2))
-    return (min(ends) - curve - error) / float(np.mean(w))
+    error = e0 + hi * e1 + hi * hi * e2
+    error += FORMING_ROUNDING * (norm2_bound(M0) + hi * norm2_bound(M1) + hi * hi * norm2_bound(M2))
+    scale = float(np.mean(w))
+    least = np.inf
+    for lam in (lo, hi):
+        X = M0 + lam * M1 + (lam * lam) * M2
+        low = float(sl.eigh(X, eigvals_only=True, subset_by_index=[0, 0])[0])
+        least = min(least, low - eig_rounding(X) - tol * norm2_bound(X))
+        if least <= error:  # not proved whatever the rest: its margin is at most this
+            return (least - error) / scale
+    top = float(sl.eigh(M2, eigvals_only=True, subset_by_index=[M2.shape[0] - 1, M2.shape[0] - 1])[0])
+    curve = 0.25 * (hi - lo) ** 2 * (max(top, 0.0) + eig_rounding(M2))
+    return (least - curve - error) / scale
 
 
 def G_at(pieces_JJ, s: Sample) -> np.ndarray:
