@@ -165,12 +165,13 @@ def test_the_cli_prints_and_stores_the_damped_onsets(tmp_path):
 def test_damped_modes_below_the_lambda_zero_onset_make_a_bracket_with_a_proved_floor():
     """The 6 × 4 interface with η 0.1 / 0.01: the λ = 0 mode at μ_c = 6.708 has ξᵀDx < 0, so
     damped divergence modes exist just below it; the onset is then a bracket whose upper end
-    is where the enumeration finds them and whose lower end the damped Rayleigh bound proves
-    (convex in μ) — still far above the flutter onset, so flutter is proved to start first."""
+    is where the enumeration finds them and whose lower end the damped Rayleigh bound (convex in
+    μ) and the λ-windows carried over μ prove — [6.7039, 6.7061], far above the flutter onset,
+    so flutter is proved to start first."""
     mu = meicp.critical_friction(damped(INTERFACE, eta=(0.1, 0.01)))
     d = mu.divergence
     assert not d.exact and d.upper < 6.7082039 and "born at" in d.evidence and "convex in μ" in d.evidence
-    assert 1.0 < d.lower < d.upper
+    assert 6.69 < d.lower < d.upper and "carried over μ" in d.evidence
     assert mu.first == "flutter" and mu.flutter.upper < d.lower
     # the floor is sound: the enumeration finds no damped divergence mode on a grid below it
     for m in np.linspace(0.05, d.lower, 6):

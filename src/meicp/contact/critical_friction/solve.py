@@ -162,12 +162,18 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: b
             top = min(upper, born)
             return _damped_floor(lattice, lines, Onset(top, top, True, text + "; with damping these modes are "
                                                        f"divergence too: it starts at μ ≤ {top:.8g}"), comm=comm)
-        onset = Onset(lower, upper, True, text)
         checked = born is not None or bisection or (bisection is None and small)
+        onset = Onset(lower, upper, True, text if checked or damped else text + SIGMA_ZERO)
         return onset if checked or not damped else _damped_floor(lattice, lines, onset, UNCHECKED, comm)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
-    onset = Onset(min(lower, upper), upper, exact, "; ".join(evidence))
+    onset = Onset(min(lower, upper), upper, exact, "; ".join(evidence) + ("" if damped else SIGMA_ZERO))
     return _damped_floor(lattice, lines, onset, UNCHECKED, comm) if damped else onset
+
+
+#: what an undamped onset means when the cross-check did not run (docs/critical-friction.md,
+#: "The bisection check")
+SIGMA_ZERO = ("; the onset of σ = 0 modes: modes born at σ > 0 below it are not looked for (the cross-check did not "
+              "run: too large)")
 
 
 #: why a damped lattice's λ = 0 onset is not its divergence onset when the cross-check did not run
