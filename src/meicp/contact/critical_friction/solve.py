@@ -200,7 +200,9 @@ def _damped_floor(lattice, lines, onset: Onset, why: str = "", comm=None) -> Ons
 
 def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
     """``(m, how)``: no damped divergence mode (any λ ≥ 0) of one grazing case at any μ in [0, m], m ≤ top."""
-    floor = divergence_free_up_to(lattice, lines, case, top)
+    # to 1 %: the λ-windows over μ carry it on from there
+    floor = divergence_free_up_to(lattice, lines, case, top, rel=1e-2)
+    log.info("critical_friction: no damped divergence mode for μ in [0, %.6g] (damped Rayleigh bound)", floor)
     text = f"[0, {floor:.8g}] by the damped Rayleigh bound at both ends (convex in μ: a proof)"
     if floor >= top:
         return floor, text
