@@ -25,7 +25,7 @@ test: setup
 
 # pytest exits 5 when it collects nothing: that is a failure here, as it should be
 test-serial:
-	timeout 900 $(PY) -m pytest -q --timeout=300 -p no:cacheprovider -m "not mpi" tests
+	timeout 1200 $(PY) -m pytest -q --timeout=300 -p no:cacheprovider -m "not mpi" tests
 
 test-mpi:
 	timeout 600 $(PYTEST_MPI) -q -m mpi tests
