@@ -162,12 +162,19 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: b
             top = min(upper, born)
             return _damped_floor(lattice, lines, Onset(top, top, True, text + "; with damping these modes are "
                                                        f"divergence too: it starts at μ ≤ {top:.8g}"), comm=comm)
-        checked = born is not None or bisection or (bisection is None and small)
-        onset = Onset(lower, upper, True, text if checked or damped else text + SIGMA_ZERO)
-        return onset if checked or not damped else _damped_floor(lattice, lines, onset, UNCHECKED, comm)
+        if born is not None or bisection or (bisection is None and small):  # cross-checked
+            return Onset(lower, upper, True, text)
+        return _unchecked(lattice, lines, Onset(lower, upper, True, text), damped, comm)
     exact = (upper - lower <= EXACT_WIDTH * upper) if np.isfinite(upper) else lower >= mu_max
-    onset = Onset(min(lower, upper), upper, exact, "; ".join(evidence) + ("" if damped else SIGMA_ZERO))
-    return _damped_floor(lattice, lines, onset, UNCHECKED, comm) if damped else onset
+    return _unchecked(lattice, lines, Onset(min(lower, upper), upper, exact, "; ".join(evidence)), damped, comm)
+
+
+def _unchecked(lattice, lines, onset: Onset, damped: bool, comm) -> Onset:
+    """The onset where the cross-check did not run: with damping that is not proportional its
+    lower end cut to what is proved (:func:`_damped_floor`), else said to be that of σ = 0 modes."""
+    if damped:
+        return _damped_floor(lattice, lines, onset, UNCHECKED, comm)
+    return dataclasses.replace(onset, evidence=onset.evidence + SIGMA_ZERO)
 
 
 #: what an undamped onset means when the cross-check did not run (docs/critical-friction.md,
