@@ -142,8 +142,8 @@ def test_the_window_bound_holds_between_its_ends():
             a, b = exact(lo), exact(hi)
             w = rng.uniform(0.5, 2.0, J.size)
             for lam in np.linspace(lo, hi, 7):
-                from meicp.contact.damped_windows import G_at, _polynomial
-                (M0, M1, M2), _ = _polynomial(HJJ, a, b, w, float(np.mean(w)), 0.0)
+                from meicp.contact.damped_windows import G_at, window_parts
+                (M0, M1, M2), _ = window_parts(HJJ, a, b, w, 0.0).at(float(np.mean(w)))
                 WG = w[:, None] * G_at(HJJ, exact(lam))
                 gap = 0.5 * (WG + WG.T) - (M0 + lam * M1 + lam * lam * M2)
                 assert np.linalg.eigvalsh(gap).min() >= -1e-10 * np.abs(WG).max()

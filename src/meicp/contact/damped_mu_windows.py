@@ -120,8 +120,14 @@ def _cover_in_mu(condense, tau, unit, JJ0, N_JJ, NC_JJ, start, top, lam_max, tol
             made[lam] = condense(lam)
         return made[lam]
 
+    scaled: dict = {}  # Ξ at the current interval's two μ: its λ-cover and both ends read them
+
     def at(mu):
-        return lambda lam: _scaled(condensed_at(lam), mu)
+        def sample(lam):
+            if (mu, lam) not in scaled:
+                scaled[mu, lam] = _scaled(condensed_at(lam), mu)
+            return scaled[mu, lam]
+        return sample
 
     def blocks_JJ(mu):
         return [JJ0[0] + mu * N_JJ, JJ0[1] + mu * NC_JJ, JJ0[2]]
@@ -132,6 +138,8 @@ def _cover_in_mu(condense, tau, unit, JJ0, N_JJ, NC_JJ, start, top, lam_max, tol
     pending = [(start, top)]
     while pending:
         m0, m1 = pending.pop(0)
+        for key in [key for key in scaled if key[0] not in (m0, m1)]:
+            del scaled[key]
         if time.perf_counter() - t0 > seconds:
             return reach, intervals, len(made), f"stopped after {time.perf_counter() - t0:.0f} s"
         used: dict = {}

@@ -301,16 +301,12 @@ def window_parts(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, spread: float) 
     X_a, X_b widened to X_a/(1 − κρ), X_b/(1 + κρ) for the rounding of C̃ ⪰ 0
     (:func:`ordering_spread`)."""
     up, down = 1.0 / (1.0 - spread), 1.0 / (1.0 + spread)
-    M = [np.array(H, dtype=float) for H in pieces_JJ]
     err = [0.0, 0.0, 0.0]
     wmax = float(w.max())
-    # sym(W(a + b)X_a aᵀ): blocks (i: a or b, j: a), power POWER[i] + POWER[j]
-    for i in range(4):
+    for i in range(4):  # the blocks of (a + b)X_a aᵀ, each charged its error
         for j in (0, 1):
-            k = POWER[i] + POWER[j]
-            M[k] -= up * a.block(i, j)
-            err[k] += wmax * up * (a.error)
-    M = [w[:, None] * Mk for Mk in M]
+            err[POWER[i] + POWER[j]] += wmax * up * (a.error)
+    M = [w[:, None] * Mk for Mk in _coefficients(pieces_JJ, a, up)]
     base = [0.5 * (Mk + Mk.T) for Mk in M]
     n = w.size
     Q0, Q1, Q2 = ([np.zeros((n, n)) for _ in range(3)] for _ in range(3))
@@ -327,12 +323,6 @@ def window_parts(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, spread: float) 
                 Q2[k] += delta
     Q0, Q1, Q2 = ([0.5 * (Q + Q.T) for Q in part] for part in (Q0, Q1, Q2))
     return WindowParts(base, Q0, Q1, Q2, err, up * a.error + down * b.error, w)
-
-
-def _polynomial(pieces_JJ, a: Sample, b: Sample, w: np.ndarray, beta: float, spread: float):
-    """``(𝓜₀, 𝓜₁, 𝓜₂)`` of the window [a.lam, b.lam] at β and the coefficients ``(e₀, e₁, e₂)``
-    bounding the 2-norm of their error (:func:`window_parts`)."""
-    return window_parts(pieces_JJ, a, b, w, spread).at(beta)
 
 
 def ordering_spread(pieces: DampedPieces, tau: float, lo: float, hi: float) -> float:
@@ -387,14 +377,20 @@ def _margin(polynomial, lo: float, hi: float, w: np.ndarray, tol: float) -> floa
     return (least - curve - error) / scale
 
 
-def G_at(pieces_JJ, s: Sample) -> np.ndarray:
-    """G(λ) = H_JJ(λ) − (a + b) X aᵀ at a sample (dense)."""
-    lam = s.lam
-    G = pieces_JJ[0] + lam * pieces_JJ[1] + lam * lam * pieces_JJ[2]
+def _coefficients(pieces_JJ, s: Sample, up: float = 1.0) -> list[np.ndarray]:
+    """``H_JJ(λ) − (a + b)·(up·X)·aᵀ`` with X the sample's, as its coefficients of λ⁰, λ¹, λ²
+    (dense): the blocks (i: a or b, j: a) of Ξ, each at the power POWER[i] + POWER[j]."""
+    M = [np.array(H, dtype=float) for H in pieces_JJ]
     for i in range(4):
         for j in (0, 1):
-            G = G - lam ** (POWER[i] + POWER[j]) * s.block(i, j)
-    return G
+            M[POWER[i] + POWER[j]] -= up * s.block(i, j)
+    return M
+
+
+def G_at(pieces_JJ, s: Sample) -> np.ndarray:
+    """G(λ) = H_JJ(λ) − (a + b) X aᵀ at a sample (dense)."""
+    M0, M1, M2 = _coefficients(pieces_JJ, s)
+    return M0 + s.lam * M1 + (s.lam * s.lam) * M2
 
 
 @dataclass
