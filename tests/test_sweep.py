@@ -118,6 +118,12 @@ def test_bad_keys_values_and_ranges_are_refused_before_any_work(scene, counted, 
         meicp.sweep(scene, "friction", out=out)
     with pytest.raises(ProblemError, match="per_point_comm"):
         meicp.sweep(scene, "friction", [1.0], per_point_comm="all", out=out)
+    # an analyze option misspelt is analyze's TypeError, raised before the first value (it was a
+    # RuntimeError at the first value, with a sweep.json saying "running" left behind)
+    with pytest.raises(TypeError, match="sweep.*'flutterr'.*did you mean 'flutter'"):
+        meicp.sweep(scene, "friction", [1.0], out=out, flutterr=False)
+    with pytest.raises(TypeError, match="did you mean 'method'"):
+        meicp.sweep(scene, "friction", [1.0], out=out, metod="auto")
     assert counted == [] and not out.exists()
 
 
@@ -192,6 +198,9 @@ def test_cli_sweep_writes_the_table_the_csv_the_json_and_the_map(cli, tmp_path):
     assert code == 0 and stderr == ""
     doc = json.loads(stdout)
     assert doc["format"] == "meicp-sweep" and doc["parameter"] == "layers.B.density" and len(doc["rows"]) == 2
+    # the layout version of every --json document, in sweep.json too (it said 1)
+    stored = json.loads((tmp_path / "d" / "sweep.json").read_text(encoding="utf-8"))
+    assert doc["format_version"] == stored["format_version"] == 2
 
 
 @pytest.mark.parametrize("args, match", [(["--mu", "0:3"], "argument --mu: a range is A:B:N"),

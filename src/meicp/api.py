@@ -55,10 +55,11 @@ def analyze(scene, comm=None, *, method: str | None = None, lam_min: float | Non
         The ranks that share the work (collective: every rank of it calls ``analyze``).
         None: ``MPI.COMM_WORLD`` — all the ranks of an ``mpirun`` job, one process without
         it.  ``MPI.COMM_SELF``: this process alone, whatever the job.
-    method : {"auto", "enumerate", "active-set"} or None
+    method : {"auto", "enumerate", "active-set", "rayleigh", "semismooth"} or None
         The MEiCP method; None: the scene's ``[solver] method`` (``auto``: enumeration when
-        small, else the proofs that scale: Rayleigh bound, σ-window, active-set search,
-        condensed proof).
+        small, else the proofs that scale in the order of :mod:`meicp.contact.divergence.driver`:
+        Rayleigh bound at 0, a first short search, condensed proof, σ-window where that proof
+        stops, the whole active-set search).
     lam_min : float or None
         List only the modes with σ ≥ lam_min (finite, ≥ 0); None: the scene's, else 0.  The
         verdict is about every σ ≥ 0 regardless (the evidence counts the modes left out).
@@ -107,7 +108,7 @@ def analyze(scene, comm=None, *, method: str | None = None, lam_min: float | Non
     --------
     >>> result = meicp.analyze("data/scenes/two_layers.toml")              # doctest: +SKIP
     >>> result.stable, result.modes[0].sigma                               # doctest: +SKIP
-    (False, 0.3292...)
+    (False, 0.3290...)
     >>> scene = meicp.load_scene("data/scenes/two_layers.toml")            # doctest: +SKIP
     >>> meicp.analyze(scene.with_friction(0.3)).stable                     # doctest: +SKIP
     True

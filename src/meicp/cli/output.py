@@ -27,13 +27,8 @@ import sys
 from contextlib import contextmanager
 
 from .._version import __version__
-from ..core.json_values import json_ready
+from ..core.json_values import FORMAT_VERSION, json_ready
 from ..core.log import stdout_closed, world_rank
-
-#: the version of every ``--json`` document's layout.  2: numbers are numbers (±∞ as null
-#: with a ``<key>_infinite`` flag; version 1 wrote the strings "inf"/"-inf"), and every
-#: subcommand's document has the three header keys
-FORMAT_VERSION = 2
 
 _saved_stdout: int | None = None
 

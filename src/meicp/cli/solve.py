@@ -1,12 +1,13 @@
 """``meicp solve SCENE.toml [-o DIR] [--no-output] [--json] [--method M] [--target T] [--nev N]
-[--critical-friction] [--no-flutter] [-v|-q] [-- PETSc options]``.
+[--critical-friction] [--no-flutter] [--flutter-dense-max N] [-v|-q] [-- PETSc options]``.
 
 Loads the scene (a bad scene fails before any work, exit 2), runs
 :func:`meicp.contact.instability.analyze` on every rank of ``MPI.COMM_WORLD`` (a scene
 without contact gets its modal analysis), prints a summary (stdout, rank 0) and writes
 ``results.h5``, ``lattice.h5`` + ``lattice.xdmf`` and the PNGs to DIR (default
-``out/<scene stem>``; see :mod:`meicp.io.results`).  ``--method``, ``--target`` and
-``--nev`` override the scene's ``[solver]`` table (recorded in results.h5); ``--no-flutter``
+``out/<scene stem>``; see :mod:`meicp.io.results`).  ``--method`` and ``--nev``
+override the scene's ``[solver]`` table, ``--target`` sets the active-set search's shift (all
+recorded in results.h5); ``--no-flutter``
 skips the flutter analysis of steady sliding (docs/flutter.md): the divergence verdict
 alone, and the overall verdict cannot be STABLE.
 
@@ -29,7 +30,8 @@ analysis, shown by default (INFO), and within a long phase a line every few seco
 Exit codes: 0 the analysis answered (stable, unstable, undecided with ``success``, or a
 modal analysis) — unstable also when a certified flutter mode decides it while the
 divergence search was inconclusive (the divergence row says so); 1 it failed
-(``result.success`` is False: nothing decided the verdict, or a solver raised), 2 bad input.
+(``result.success`` is False: nothing decided the verdict, or a solver raised), 2 bad input,
+3 an internal error.
 """
 
 from __future__ import annotations
@@ -82,7 +84,8 @@ def register(sub) -> None:
     p.add_argument("--method", choices=METHODS,
                    help="MEiCP method (default: the scene's [solver] method; auto = enumerate when small)")
     p.add_argument("--target", type=finite,
-                   help="shift of the active-set search's SLEPc solves (default 0)")
+                   help="shift of the active-set search's SLEPc solves (default: the certified top of the σ-window, "
+                        "or 1.25× the contact-strip proxy's rightmost real σ for the first search)")
     p.add_argument("--nev", type=integer(1),
                    help="eigenpairs per SLEPc solve of the last divergence search, made only when the "
                         "searches following one eigenpair found nothing; the vibration modes of a scene "

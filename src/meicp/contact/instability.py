@@ -9,10 +9,11 @@
    ``(σB − A)x = w`` solved for σ ≥ 0: by support enumeration when the reduced problem is
    small (every divergence mode; a complete enumeration that finds none, status
    ``no_solution``, proves stability — ``undecided`` or ``out_of_range`` does not), else
-   decided by :mod:`meicp.contact.divergence`: the Rayleigh bound (LDLᵀ inertia), the
-   certified σ-window [0, σ_max], the SLEPc active-set search from its top, and the
-   condensed proof on the window; undecided says what was established.
+   decided by :mod:`meicp.contact.divergence` (its driver gives the order: the Rayleigh
+   bound at 0, a first short search, the condensed proof on [0, ∞), the σ-window only where
+   that proof stops, the whole search); undecided says what was established.
 4. Modes back in natural numbering: ``u = Q̃ x``.
+5. Flutter of steady sliding: the non-real σ of each sliding pencil (:mod:`meicp.contact.flutter`).
 
 The verdict is about σ ≥ 0 whatever ``lam_min``: a negative σ is an oscillation, never a
 divergence mode, so ``lam_min`` must be ≥ 0, and a ``lam_min > 0`` only filters the modes
@@ -21,7 +22,7 @@ scene unstable, and the evidence says how many were left out).
 
 A scene without contact has no frictional instability to decide: it gets a modal analysis
 instead, its lowest vibration modes (:mod:`meicp.contact.modal`).  Each phase runs in its
-PETSc log stage (``-log_view``: static, assemble, reduce, eigen).
+PETSc log stage (``-log_view``: static, assemble, reduce, eigen, flutter).
 
 The verdict of each pencil is :mod:`meicp.contact.divergence`; the PETSc side (distributed pencil, inertia) in
 :mod:`meicp.petsc`.  The critical friction is :mod:`meicp.contact.critical_friction`.

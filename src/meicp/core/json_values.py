@@ -27,6 +27,12 @@ import numpy as np
 #: the suffix of the key that marks an infinite number (see the module docstring)
 INFINITE_SUFFIX = "_infinite"
 
+#: the version of every JSON document's layout (``--json`` and sweep.json).  2: numbers are
+#: numbers (±∞ as null with a ``<key>_infinite`` flag; version 1 wrote the strings
+#: "inf"/"-inf"), and every document starts with ``format``, ``format_version`` and
+#: ``meicp_version``
+FORMAT_VERSION = 2
+
 
 def _sign_of_infinity(value) -> int:
     """1 for +∞, −1 for −∞, 0 otherwise (a finite number, NaN, or not a float)."""

@@ -3,8 +3,9 @@ refused before it starts.  One place, so that a reader sees every threshold toge
 test or a benchmark changes one attribute (``monkeypatch.setattr(limits, NAME, value)``);
 the code reads them as ``limits.NAME`` at the call, never as a copy taken at import.
 
-Each value is backed by a measurement on this project's 2-core machine; the figures are in
-docs/benchmarks-notes.md (section named after the constant) and docs/benchmarks.md.  The
+Each value was chosen on this project's 2-core machine; where a measurement backs it, the
+figures are in the comment above it or in docs/benchmarks-notes.md (a section named after the
+constant) and docs/benchmarks.md.  The
 limits are speed budgets: none of them can turn a wrong answer into a proof, because every
 path certifies what it returns.
 """

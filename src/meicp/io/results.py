@@ -4,7 +4,8 @@ In the output directory::
 
     results.h5      the scene, versions, contact states and forces, modes, verdict (below)
     lattice.h5      the lattice (:func:`~meicp.io.lattice_output.write_lattice`) with node
-    lattice.xdmf    fields ``mode_0``, ``mode_1``... (each scaled as in the PNG),
+    lattice.xdmf    fields ``mode_0``, ``mode_1``... (each scaled as in the PNG), the fastest
+                    flutter mode's ``flutter_0_real`` and ``flutter_0_imag`` when there is one,
                     ``contact_state`` (codes below), the node indices ``i`` and ``j``, and,
                     when the static equilibrium was solved, ``static_u`` (its displacement)
                     and the contact reactions ``r_n``, ``r_t`` (NaN off the contact nodes);
@@ -75,7 +76,7 @@ In the output directory::
                                    ``found_by`` (f,) S;
                                    ``mode_<k>/support``, ``mode_<k>/interface_support/<below>``
 ``/certificates``                  ``mode_residual`` (m,); attributes ``result_residual``,
-                                   ``max_mode_residual``, ``eicp_method``, ``eicp_status``,
+                                   ``max_mode_residual``, ``eicp_solves``, ``eicp_method``, ``eicp_status``,
                                    ``eicp_message``, ``eicp_coverage`` (JSON),
                                    ``eicp_outcomes`` (JSON: method, status, message of
                                    each MEiCP, null where every DOF was held)
@@ -84,6 +85,9 @@ computed)                          ``lower``, ``upper``, ``exact``, ``evidence``
                                    known, ``first`` ("flutter" / "divergence"; absent when
                                    undecided) (:func:`critical_friction_record`); or ``error``
                                    alone: why μ_c was not determined
+``/critical_friction/divergence``  attributes ``value``, ``found``, ``lower``, ``upper``,
+                                   ``none_at_any_mu``, ``exact``, ``evidence``: the
+                                   divergence onset μ_c alone
 ``/critical_friction/flutter``     ``lower``, ``upper``, ``none_at_any_mu``, ``exact``,
                                    ``evidence``; ``flutter/mode`` the certified mode at
                                    ``upper`` (``sigma_real``, ``sigma_imag``,

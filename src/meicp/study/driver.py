@@ -20,6 +20,7 @@ another scene or other options start over, and say so.
 from __future__ import annotations
 
 import hashlib
+import inspect
 import json
 import logging
 import os
@@ -33,7 +34,10 @@ from ..core import limits
 from ..core.comm import mpi_comm, world_if_none
 from ..core.errors import MeicpError, ProblemError
 from ..contact.flutter import flutter_asked
+from ..contact.instability import REFUSED_OPTIONS
+from ..core.json_values import FORMAT_VERSION
 from ..core.progress import duration
+from ..core.validation import check_keywords
 from ..io.results_records import scene_to_toml
 from .. import petsc
 from ..io.scene import as_scene
@@ -49,6 +53,8 @@ CSV, JSON, PNG = "sweep.csv", "sweep.json", "stability_map.png"
 PER_POINT = ("auto", "split", "world")
 #: keywords the sweep sets itself: not passed on to ``analyze``
 RESERVED = ("comm", "scene_path")
+#: the options a sweep hands on to every ``analyze``
+ANALYZE_OPTIONS = frozenset(inspect.signature(analyze).parameters) - {"scene", "comm"}
 
 
 def sweep(scene, parameter: str = "friction", values=None, *, out=None, comm=None, resume: bool = True,
@@ -110,6 +116,9 @@ def sweep(scene, parameter: str = "friction", values=None, *, out=None, comm=Non
     reserved = sorted(set(analyze_options) & set(RESERVED))
     if reserved:
         raise ProblemError(f"sweep sets {reserved[0]!r} itself: pass comm=... to sweep, not to analyze")
+    # a misspelt analyze option is refused here, as analyze refuses it, not at the first value
+    # with a sweep.json left saying "running"
+    check_keywords("sweep", analyze_options, ANALYZE_OPTIONS, REFUSED_OPTIONS)
     flutter = flutter_asked(scene, flutter)
     if per_point_comm not in PER_POINT:
         raise ProblemError(f"per_point_comm must be one of {', '.join(PER_POINT)}, got {per_point_comm!r}")
@@ -226,7 +235,7 @@ class _Run:
     def metadata(self) -> dict:
         """What sweep.json says of the run: format, version, fingerprint, scene, options."""
         scene = self.scene
-        return {"format": "meicp-sweep", "format_version": 1, "meicp_version": __version__,
+        return {"format": "meicp-sweep", "format_version": FORMAT_VERSION, "meicp_version": __version__,
                 "fingerprint": self.fingerprint,
                 "scene": {"source": scene.source, "title": scene.title, "nx": scene.nx, "ny": scene.ny,
                           "dofs": scene.n_dofs},
