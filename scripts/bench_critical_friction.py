@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """``meicp.critical_friction`` past the enumeration limit (issue 14 part 4): the certified
-bracket's width and wall time on the two-layer scene (``two_layer_scene``), base contacts all
+bracket of the divergence onset μ_c (``critical_friction(..., flutter=False)``; ``--flutter``
+brackets the flutter onset too, each call then the time of both, the row's bracket still μ_c's),
+its width and wall time on the two-layer scene (``two_layer_scene``), base contacts all
 slip+ or all slip−, shear ±0.5, |J| = nx contacts.  Targets: |J| = 100 under 60 s, width
 ≤ 5 % (exact); |J| = 1,000 (10⁶ DOFs, 2 ranks) under 5 minutes, width reported.
 
@@ -66,6 +68,8 @@ def main():
     p.add_argument("--shear", type=float, nargs="+", default=[0.5, -0.5])
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--scenes", nargs="+", default=None, help="scene files instead of the family")
+    p.add_argument("--flutter", action="store_true",
+                   help="the family: bracket the flutter onset too (the rows keep μ_c's bracket)")
     args = p.parse_args()
     from mpi4py import MPI
 
@@ -82,7 +86,7 @@ def main():
                 times, mu = [], None
                 for _ in range(args.repeats):
                     with Stage(comm) as st:
-                        mu = critical_friction(scene, comm=comm)
+                        mu = critical_friction(scene, comm=comm, flutter=args.flutter).divergence
                     times.append(st.wall)
                 row = {"nx": nx, "rows": "+".join(map(str, args.rows)), "dofs": scene.n_dofs, "J": nx,
                        "ranks": comm.Get_size(), "states": states, "shear": shear, "lower": f"{mu.lower:.10g}",
