@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 import meicp
 from meicp.contact.critical_friction.flutter_onset import sliding_families
 from meicp.contact.critical_friction.solve import _friction_states
+from meicp.contact import damped_rayleigh
 from meicp.contact.damped_cover import QuadraticFamily, damped_cover_step
 from meicp.core import limits
 from meicp.eicp.quadratic import quadratic_spectrum
@@ -185,3 +186,21 @@ def test_proportional_damping_keeps_the_exact_onset_past_the_enumeration():
                             interface={"kind": "frictional", "friction": 1.0, "states": "slip+"})
     d = meicp.critical_friction(damped(scene, eta=(0.2, 0.1)), flutter=False).divergence
     assert d.exact and d.upper == pytest.approx(6.7082039, rel=1e-7) and "proportional" in d.evidence
+
+
+
+def test_the_rayleigh_floor_ends_when_nothing_above_0_is_proved(monkeypatch):
+    """The Rayleigh bound along μ proved at 0 and nowhere above: the bisection ends with 0 (with
+    lo = 0 its stopping rule hi − lo ≤ rel·hi never held: a grazing case looped forever)."""
+    scene = damped(two_layer_scene(6, (2, 2), mu=1.0, states="slip+"), eta=[0.02, 0.02])
+    lattice, lines = _friction_states(scene)
+    tried = []
+
+    def only_at_zero(pen, C=None, M=None):
+        mu = float(np.max(np.abs(pen.maps.friction_rows().data), initial=0.0))
+        tried.append(mu)
+        return mu == 0.0, ""
+
+    monkeypatch.setattr(damped_rayleigh, "damped_rayleigh_bound", only_at_zero)
+    assert damped_rayleigh.divergence_free_up_to(lattice, lines, (), 5.0) == 0.0
+    assert tried[0] == 0.0 and len(tried) == damped_rayleigh.MAX_HALVINGS + 2

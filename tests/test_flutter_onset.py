@@ -14,6 +14,7 @@ from scipy.optimize import brentq
 import meicp
 from meicp.contact.critical_friction import CriticalFriction, critical_friction
 from meicp.contact.critical_friction.flutter_onset import dense_onset
+from meicp.contact.critical_friction import solve
 from meicp.contact.critical_friction.result import FLUTTER_EXACT_WIDTH, Onset
 from meicp.contact.flutter import dense_flutter
 from meicp.contact.flutter_cover import PencilFamily, cover_step
@@ -201,8 +202,8 @@ def test_past_the_dense_limit_the_search_gives_the_upper_end_only(monkeypatch):
 
 # ----------------------------------------------------------------- combining the onsets
 
-def _onset(lower, upper, exact=True):
-    return Onset(lower, upper, exact, "")
+def _onset(lower, upper, exact=True, floor=None):
+    return Onset(lower, upper, exact, "", floor=floor)
 
 
 @pytest.mark.parametrize("div, flu, first, value, exact", [
@@ -212,11 +213,33 @@ def _onset(lower, upper, exact=True):
     (_onset(1.0, 1.9, False), _onset(0.6, 0.6000001), "flutter", 0.6000001, True),
     (_onset(1.9, 1.9), _onset(0.0, np.inf, False), None, 1.9, False),  # flutter not excluded below 1.9
     (_onset(np.inf, np.inf), _onset(np.inf, np.inf), None, np.inf, True),
+    # a σ = 0 onset whose σ > 0 births are excluded only up to its floor: flutter is first only below it
+    (_onset(1.9, 1.9, floor=0.7), _onset(0.63, 0.6300006), "flutter", 0.6300006, True),
+    (_onset(1.9, 1.9, floor=0.5), _onset(0.63, 0.6300006), None, 0.6300006, False),
+    (_onset(1.9, 1.9, floor=0.0), _onset(2.5, 2.5), "divergence", 1.9, True),  # a certified mode at 1.9
 ])
 def test_the_overall_onset_is_the_smaller_one(div, flu, first, value, exact):
     mu = CriticalFriction.of(div, flu)
     assert mu.first == first and float(mu) == value and mu.exact is exact
-    assert mu.lower == min(div.lower, flu.lower) and mu.upper == min(div.upper, flu.upper)
+    assert mu.lower == min(div.proved_free, flu.lower) and mu.upper == min(div.upper, flu.upper)
+
+
+def test_flutter_is_first_only_where_divergence_born_above_sigma_0_is_excluded(monkeypatch):
+    """Past the cross-check (|J| > CRITICAL_J) the divergence bracket is that of σ = 0 modes, so
+    "flutter starts first" needs modes of any σ ≥ 0 excluded up to the flutter mode's μ: the
+    Rayleigh bound along μ proves it here; when nothing is proved the answer is undecided (it
+    said "flutter first" on the σ = 0 lower end alone)."""
+    monkeypatch.setattr(limits, "CRITICAL_J", 6)
+    scene = two_layer_scene(8, (2, 2), mu=1.0, states="slip-", shear=0.5)
+    mu = critical_friction(scene)
+    d, f = mu.divergence, mu.flutter
+    assert f.exact and f.upper < d.lower and "not looked for" in d.evidence
+    assert mu.first == "flutter" and f.upper < d.floor <= d.lower and mu.lower == f.lower
+    assert "no divergence mode of any σ ≥ 0 for μ in [0," in d.evidence
+    monkeypatch.setattr(solve, "_case_floor", lambda *args: (0.0, "nothing proved"))
+    mu = critical_friction(scene)
+    assert mu.first is None and mu.divergence.floor == 0.0 and mu.lower == 0.0 and not mu.exact
+    assert "born at σ > 0 are excluded only for μ ≤ 0" in mu.evidence
 
 
 # ------------------------------------------------------------------------ CLI and files

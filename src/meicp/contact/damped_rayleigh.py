@@ -29,6 +29,8 @@ from .rayleigh import rayleigh_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
 SLACK = 64
+#: the most halvings of divergence_free_up_to's bisection (2⁻⁴⁰ of its upper end)
+MAX_HALVINGS = 40
 
 
 def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, str]:
@@ -98,7 +100,11 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     if proved(upper):
         return upper
     lo, hi = 0.0, upper
-    while hi - lo > rel * hi:
+    # at most MAX_HALVINGS steps: with nothing proved above 0, lo stays 0 and hi − lo > rel·hi
+    # forever (a grazing case whose bound fails at once looped here)
+    for _ in range(MAX_HALVINGS):
+        if hi - lo <= rel * hi:
+            break
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if proved(mid) else (lo, mid)
     return lo

@@ -119,5 +119,6 @@ def _onset(record: dict | None) -> Onset | None:
         mode = FlutterMode(sigma=complex(mode["sigma_real"], mode["sigma_imag"]), x=np.zeros(0),
                            residual=float(mode["residual"]), radius=float(mode["radius"]),
                            branch=mode.get("branch", ""))
+    floor = record.get("floor")
     return Onset(float(record["lower"]), float(record["upper"]), bool(record["exact"]), record.get("evidence", ""),
-                 mode or None)
+                 mode or None, None if floor is None else float(floor))

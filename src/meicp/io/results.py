@@ -87,7 +87,8 @@ computed)                          ``lower``, ``upper``, ``exact``, ``evidence``
                                    alone: why μ_c was not determined
 ``/critical_friction/divergence``  attributes ``value``, ``found``, ``lower``, ``upper``,
                                    ``none_at_any_mu``, ``exact``, ``evidence``: the
-                                   divergence onset μ_c alone
+                                   divergence onset μ_c alone; ``floor`` where its lower end
+                                   is about σ = 0 modes alone (no mode of any σ ≥ 0 below it)
 ``/critical_friction/flutter``     ``lower``, ``upper``, ``none_at_any_mu``, ``exact``,
                                    ``evidence``; ``flutter/mode`` the certified mode at
                                    ``upper`` (``sigma_real``, ``sigma_imag``,

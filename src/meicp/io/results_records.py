@@ -65,10 +65,13 @@ def onset_record(onset) -> dict:
     record: ``value`` (= ``upper``), ``found`` (upper finite), ``lower``, ``upper`` (floats,
     inf included), ``none_at_any_mu`` (lower inf: proved at every μ), ``exact``, ``evidence``,
     and for flutter ``mode``: the certified mode at ``upper`` (σ, growth rate, frequency,
-    residual, radius, branch), None without one."""
+    residual, radius, branch), None without one; for divergence ``floor`` where its lower end is
+    about σ = 0 modes alone (no mode of any σ ≥ 0 on [0, floor], proved), absent otherwise."""
     lower, upper = float(onset.lower), float(onset.upper)
     record = {"value": upper, "found": math.isfinite(upper), "lower": lower, "upper": upper,
               "none_at_any_mu": lower == math.inf, "exact": bool(onset.exact), "evidence": onset.evidence}
+    if getattr(onset, "floor", None) is not None:
+        record["floor"] = float(onset.floor)
     mode = getattr(onset, "mode", None)
     record["mode"] = None if mode is None else {
         "sigma_real": float(mode.sigma.real), "sigma_imag": float(mode.sigma.imag),

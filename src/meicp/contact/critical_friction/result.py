@@ -26,13 +26,17 @@ class Onset:
         :data:`FLUTTER_EXACT_WIDTH`), or none exists up to the bound searched, proved.
     evidence: how each end was obtained.
     mode: flutter only, the certified :class:`~meicp.contact.result.FlutterMode` at ``upper``
-        (None for divergence, or when none was found)."""
+        (None for divergence, or when none was found).
+    floor: divergence only, where ``lower`` is about σ = 0 modes alone (the cross-check for
+        modes born at σ > 0 did not run): no divergence mode of any σ ≥ 0 for μ in [0, floor],
+        proved (0: nothing proved); None where ``lower`` covers them too."""
 
     lower: float
     upper: float
     exact: bool
     evidence: str
     mode: object = None
+    floor: float | None = None
 
     def __float__(self) -> float:
         return float(self.upper)
@@ -44,6 +48,12 @@ class Onset:
     def width(self) -> float:
         """(upper − lower)/upper: 0 when the ends meet, inf without an upper end."""
         return _width(self.lower, self.upper)
+
+    @property
+    def proved_free(self) -> float:
+        """Below this μ no mode of this kind exists, of any σ ≥ 0 for divergence: ``lower``, or
+        the ``floor`` where ``lower`` is about σ = 0 modes alone."""
+        return self.lower if self.floor is None else min(self.floor, self.lower)
 
     def describe(self, what: str = "mode") -> str:
         """One line: ``1.4605 (exact)``, ``in [1.08, 1.4605] (width …)`` or ``≥ 2.3 (no …
@@ -75,7 +85,9 @@ def first_onset(divergence: Onset, flutter: Onset | None) -> str | None:
     round, None when the brackets overlap (or flutter was not analysed)."""
     if flutter is None:
         return None
-    if flutter.upper < divergence.lower:
+    # the divergence onset's lower end may be about σ = 0 modes alone: a mode born at σ > 0
+    # below it would start first, so flutter is first only below what excludes those too
+    if flutter.upper < divergence.proved_free:
         return "flutter"
     if divergence.upper < flutter.lower:
         return "divergence"
@@ -98,8 +110,8 @@ class CriticalFriction(float):
     overall bracket: a μ at which a certified mode exists (inf when none was found) —
     carrying that bracket and the two onsets it combines.
 
-    lower, upper, exact, evidence: the overall bracket ``[min(lower_d, lower_f),
-        min(upper_d, upper_f)]``; exact when the first onset's bracket is exact and lies
+    lower, upper, exact, evidence: the overall bracket ``[min(free_d, lower_f),
+        min(upper_d, upper_f)]`` (``free_d``: :attr:`Onset.proved_free` of divergence); exact when the first onset's bracket is exact and lies
         below the other's lower end, or both are exact.
     divergence: the :class:`Onset` of divergence (a σ = 0 mode, μ_c).
     flutter: the :class:`Onset` of flutter (the smallest μ with a non-real σ of the sliding
@@ -133,11 +145,16 @@ class CriticalFriction(float):
             return cls(divergence.upper, divergence.lower, divergence.exact,
                        divergence.evidence + "; flutter not analysed", divergence=divergence)
         first = first_onset(divergence, flutter)
-        lower, upper = min(divergence.lower, flutter.lower), min(divergence.upper, flutter.upper)
+        lower, upper = min(divergence.proved_free, flutter.lower), min(divergence.upper, flutter.upper)
         if first is None:
-            exact = divergence.exact and flutter.exact
+            # both known: divergence's only where σ > 0 births are excluded up to its lower end
+            exact = divergence.exact and divergence.proved_free >= divergence.lower and flutter.exact
             which = ("the two brackets overlap: which instability starts first is undecided" if exact or
                      np.isfinite(upper) else "no instability found")
+            if flutter.upper < divergence.lower:
+                which = (f"flutter is certified at μ = {flutter.upper:.8g}, below the σ = 0 onset, but divergence "
+                         f"modes born at σ > 0 are excluded only for μ ≤ {divergence.proved_free:.8g}: which "
+                         "instability starts first is undecided")
         else:
             exact = (flutter if first == "flutter" else divergence).exact
             which = f"{first} starts first"

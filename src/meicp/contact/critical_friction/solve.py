@@ -107,8 +107,8 @@ def critical_friction(scene, *, mu_max: float = 1e3, bisection: bool | None = No
                                          f"({DampingUsed.of(scene).describe()}); {divergence.evidence}")
     if not flutter:
         return CriticalFriction.of(divergence, None)
-    return CriticalFriction.of(divergence, flutter_onset(lattice, lines, scene, mu_max=mu_max, comm=comm,
-                                                         options=dict(scene.petsc)))
+    onset_f = flutter_onset(lattice, lines, scene, mu_max=mu_max, comm=comm, options=dict(scene.petsc))
+    return CriticalFriction.of(_floor_for(lattice, lines, divergence, onset_f, comm), onset_f)
 
 
 def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: bool = False) -> Onset:
@@ -171,10 +171,30 @@ def _divergence_onset(lattice, lines, mu_max, bisection, tol, comm, *, damped: b
 
 def _unchecked(lattice, lines, onset: Onset, damped: bool, comm) -> Onset:
     """The onset where the cross-check did not run: with damping that is not proportional its
-    lower end cut to what is proved (:func:`_damped_floor`), else said to be that of σ = 0 modes."""
+    lower end cut to what is proved (:func:`_damped_floor`), else said to be that of σ = 0 modes,
+    with nothing yet proved of modes born at σ > 0 (``floor`` 0: :func:`_floor_for`)."""
     if damped:
         return _damped_floor(lattice, lines, onset, UNCHECKED, comm)
-    return dataclasses.replace(onset, evidence=onset.evidence + SIGMA_ZERO)
+    return dataclasses.replace(onset, evidence=onset.evidence + SIGMA_ZERO, floor=0.0)
+
+
+def _floor_for(lattice, lines, divergence: Onset, flutter: Onset, comm) -> Onset:
+    """``divergence`` with its ``floor`` raised as far as the overall answer needs it: above
+    the flutter mode's μ when flutter is certified below the σ = 0 onset (else "flutter starts
+    first" is not proved), else up to the flutter onset's lower end (the overall lower end) —
+    by the Rayleigh bound along μ and the condensed windows carried over μ, which exclude
+    divergence modes of any σ ≥ 0 (:func:`_case_floor`, damping 0).  Collective on ``comm``."""
+    if divergence.floor is None:
+        return divergence
+    need = flutter.upper if flutter.upper < divergence.lower else min(flutter.lower, divergence.lower)
+    if not 0 < need < np.inf:
+        return divergence
+    top = min(need * (1 + 1e-9), divergence.lower)
+    floors = [_case_floor(lattice, lines, case, top, comm) for case in grazing_cases(lines)]
+    floor = min(f for f, _ in floors)
+    text = (f"{divergence.evidence}; no divergence mode of any σ ≥ 0 for μ in [0, {floor:.8g}] (what the answer "
+            "needs proved: " + "; ".join(t for _, t in floors) + ")")
+    return dataclasses.replace(divergence, floor=floor, evidence=text)
 
 
 #: what an undamped onset means when the cross-check did not run (docs/critical-friction.md,
@@ -206,11 +226,15 @@ def _damped_floor(lattice, lines, onset: Onset, why: str = "", comm=None) -> Ons
 
 
 def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
-    """``(m, how)``: no damped divergence mode (any λ ≥ 0) of one grazing case at any μ in [0, m], m ≤ top."""
+    """``(m, how)``: no divergence mode (any λ ≥ 0, so any σ = λ² ≥ 0 without damping) of one
+    grazing case at any μ in [0, m], m ≤ top; with damping 0 the bound and the windows are the
+    undamped ones."""
     # to 1 %: the λ-windows over μ carry it on from there
     floor = divergence_free_up_to(lattice, lines, case, top, rel=1e-2)
-    log.info("critical_friction: no damped divergence mode for μ in [0, %.6g] (damped Rayleigh bound)", floor)
-    text = f"[0, {floor:.8g}] by the damped Rayleigh bound at both ends (convex in μ: a proof)"
+    log.info("critical_friction: no divergence mode of any λ ≥ 0 for μ in [0, %.6g] (Rayleigh bound along μ)",
+             floor)
+    bound = "damped Rayleigh bound" if lattice.model.damped else "Rayleigh bound (sym A(μ) ≺ 0)"
+    text = f"[0, {floor:.8g}] by the {bound} at both ends (convex in μ: a proof)"
     if floor >= top:
         return floor, text
     with pencil_of(lattice, lines, case, maps=reduced_system(lattice.model, lines, case).with_friction(1.0)) as unit:
