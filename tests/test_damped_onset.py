@@ -203,4 +203,5 @@ def test_the_rayleigh_floor_ends_when_nothing_above_0_is_proved(monkeypatch):
 
     monkeypatch.setattr(damped_rayleigh, "damped_rayleigh_bound", only_at_zero)
     assert damped_rayleigh.divergence_free_up_to(lattice, lines, (), 5.0) == 0.0
-    assert tried[0] == 0.0 and len(tried) == damped_rayleigh.MAX_HALVINGS + 2
+    # 0, the upper end, then 5 / 8^k down to 1e-6·5: 7 steps
+    assert tried[0] == 0.0 and len(tried) == 2 + 7 and tried[-1] <= 5.0 * damped_rayleigh.SMALLEST

@@ -29,8 +29,10 @@ from .rayleigh import rayleigh_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
 SLACK = 64
-#: the most halvings of divergence_free_up_to's bisection (2⁻⁴⁰ of its upper end)
-MAX_HALVINGS = 40
+#: divergence_free_up_to: while nothing above 0 is proved, each step divides its upper end
+#: by DESCENT, down to SMALLEST·upper (then 0 is returned: 7 steps)
+DESCENT = 8
+SMALLEST = 1e-6
 
 
 def friction_shift(maps, C: sp.spmatrix, M: sp.spmatrix) -> tuple[float | None, str]:
@@ -100,12 +102,13 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     if proved(upper):
         return upper
     lo, hi = 0.0, upper
-    # at most MAX_HALVINGS steps: with nothing proved above 0, lo stays 0 and hi − lo > rel·hi
-    # forever (a grazing case whose bound fails at once looped here)
-    for _ in range(MAX_HALVINGS):
-        if hi - lo <= rel * hi:
+    # while nothing above 0 is proved, down by DESCENT at a time and not below SMALLEST·upper
+    # (halving from lo = 0, hi − lo > rel·hi held forever: a grazing case looped here; at 10⁶
+    # DOFs each step is a pencil and an LDLᵀ), then bisection
+    while hi - lo > rel * hi:
+        if lo == 0.0 and hi <= SMALLEST * upper:
             break
-        mid = 0.5 * (lo + hi)
+        mid = hi / DESCENT if lo == 0.0 else 0.5 * (lo + hi)
         lo, hi = (mid, hi) if proved(mid) else (lo, mid)
     return lo
 
