@@ -189,11 +189,9 @@ def _floor_for(lattice, lines, divergence: Onset, flutter: Onset, comm) -> Onset
     need = flutter.upper if flutter.upper < divergence.lower else min(flutter.lower, divergence.lower)
     if not 0 < need < np.inf:
         return divergence
-    top = min(need * (1 + 1e-9), divergence.lower)
-    floors = [_case_floor(lattice, lines, case, top, comm) for case in grazing_cases(lines)]
-    floor = min(f for f, _ in floors)
+    floor, how = _proved_floor(lattice, lines, min(need * (1 + 1e-9), divergence.lower), comm)
     text = (f"{divergence.evidence}; no divergence mode of any σ ≥ 0 for μ in [0, {floor:.8g}] (what the answer "
-            "needs proved: " + "; ".join(t for _, t in floors) + ")")
+            f"needs proved: {how})")
     return dataclasses.replace(divergence, floor=floor, evidence=text)
 
 
@@ -213,16 +211,22 @@ def _damped_floor(lattice, lines, onset: Onset, why: str = "", comm=None) -> Ons
     λ ≥ 0: the damped Rayleigh bound (convex in μ: the bound at 0 and at m proves [0, m];
     :func:`~..damped_rayleigh.divergence_free_up_to`), then condensed λ-windows carried over μ
     from there (:mod:`..damped_mu_windows`), per grazing case.  Collective on ``comm``."""
-    top = min(onset.lower, onset.upper)
-    floors = [_case_floor(lattice, lines, case, top, comm) if np.isfinite(top) else (0.0, "")
-              for case in grazing_cases(lines)]
-    floor = min(f for f, _ in floors)
+    floor, how = _proved_floor(lattice, lines, min(onset.lower, onset.upper), comm)
     lower = min(onset.lower, floor)
     text = (f"{onset.evidence}; {why + '; ' if why else ''}no damped divergence mode of any λ ≥ 0 for μ in "
-            f"[0, {floor:.8g}]: " + "; ".join(t for _, t in floors))
+            f"[0, {floor:.8g}]: {how}")
     exact = onset.exact if lower == onset.lower else bool(np.isfinite(onset.upper)
                                                           and onset.upper - lower <= EXACT_WIDTH * onset.upper)
     return Onset(lower, onset.upper, exact, text)
+
+
+def _proved_floor(lattice, lines, top: float, comm) -> tuple[float, str]:
+    """``(m, how)``: no divergence mode of any λ ≥ 0 (σ ≥ 0 without damping) at any μ in [0, m],
+    m ≤ top, the smallest over the grazing cases (:func:`_case_floor`), each case's how joined;
+    ``(0, "")`` for an infinite ``top``.  Collective on ``comm``."""
+    floors = [_case_floor(lattice, lines, case, top, comm) if np.isfinite(top) else (0.0, "")
+              for case in grazing_cases(lines)]
+    return min(f for f, _ in floors), "; ".join(t for _, t in floors)
 
 
 def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
