@@ -167,7 +167,9 @@ def _run_analyze(sc, ref, common, rows, method):
 def _run_critical_friction(sc, ref, common, rows, mu, mu_c_ref):
     t0 = time.perf_counter()
     try:
-        mc = meicp.critical_friction(sc)
+        # the divergence onset μ_c, which the reference is: the float of critical_friction with
+        # flutter is the overall onset (two_layers.toml flutters from 0.6308), judged wrong here
+        mc = meicp.critical_friction(sc, flutter=False)
         status = "solved"
     except ConvergenceError:
         mc, status = float("nan"), "convergence_error"
