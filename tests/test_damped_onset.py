@@ -196,7 +196,7 @@ def test_the_rayleigh_floor_ends_when_nothing_above_0_is_proved(monkeypatch):
     lattice, lines = _friction_states(scene)
     tried = []
 
-    def only_at_zero(pen, C=None, M=None):
+    def only_at_zero(pen, C=None, M=None, *, comm=None):
         mu = float(np.max(np.abs(pen.maps.friction_rows().data), initial=0.0))
         tried.append(mu)
         return mu == 0.0, ""

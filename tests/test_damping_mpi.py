@@ -200,3 +200,21 @@ def test_the_lambda_windows_over_mu_on_two_ranks(comm):
     assert 6.69 < reach["two"] < 6.7053 and 6.69 < reach["one"] < 6.7053
     assert reach["two"] == pytest.approx(reach["one"], rel=1e-3)
     assert comm.allgather(reach["two"]) == [reach["two"]] * comm.size
+
+
+@pytest.mark.parametrize("mu, tau", [(3.0, 0.0), (0.5, 0.0)])
+def test_a_scipy_pencils_bound_factored_over_two_ranks_is_the_serial_one(comm, mu, tau):
+    """The critical friction's SciPy pencils (every rank holding them) get their Rayleigh
+    bounds factored over the ranks, node by node: the same proof and the same count as on one
+    process, on every rank (at 10⁶ DOFs each rank factored the whole pencil alone)."""
+    from mpi4py import MPI
+
+    from meicp.contact.problem import pencil
+    from meicp.contact.rayleigh import pencil_bound, rayleigh_bound
+    from meicp.examples import two_layer_scene
+
+    with pencil(two_layer_scene(30, (3, 3), mu=mu, states="slip+", shear=0.5), comm=MPI.COMM_SELF) as pen:
+        alone = rayleigh_bound(pen.A, pen.B, tau, decisive=False)
+        shared = pencil_bound(pen, tau, comm)
+    assert (shared.proved, shared.above) == (alone.proved, alone.above)
+    assert comm.allgather((shared.proved, shared.above)) == [(alone.proved, alone.above)] * comm.size

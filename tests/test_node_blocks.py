@@ -138,3 +138,23 @@ def test_the_padded_pattern_couples_whole_groups_and_nothing_else(contiguous):
     assert np.array_equal(pattern, expected)
     assert all(np.all(np.diff(P.indices[P.indptr[i]:P.indptr[i + 1]]) > 0) for i in range(n))  # sorted, no repeats
     assert abs(P - H).max() == 0
+
+
+@pytest.mark.parametrize("mu, tau", [(3.0, 0.0), (3.0, -0.05), (0.5, 0.0), (0.5, 0.2)])
+def test_the_inertia_of_a_pencil_factored_by_node_is_the_plain_one(mu, tau):
+    """The Rayleigh bound of a SciPy pencil factored node by node (explicit zeros completing
+    every node block: the critical friction's floor, the serial bound at 0) counts the same
+    eigenvalues as without the padding — where the bound holds and where it fails — and the
+    padding is there to be read (its pattern is larger)."""
+    from meicp.contact.problem import pencil
+    from meicp.contact.rayleigh import pencil_bound, rayleigh_bound
+    from meicp.petsc.inertia import rounding_margin
+
+    with pencil(two_layer_scene(30, (3, 3), mu=mu, states="slip+", shear=0.5)) as pen:
+        plain = rayleigh_bound(pen.A, pen.B, tau, decisive=False)
+        by_node = pencil_bound(pen, tau)
+        S = (0.5 * (pen.A + pen.A.T) - tau * pen.B).tocsr()
+        padded = NodeBlocks(node_of(pen.maps.retained)).pad(S)
+    assert (by_node.proved, by_node.above, by_node.margin) == (plain.proved, plain.above, plain.margin)
+    assert padded.nnz > S.nnz and abs(padded - S).max() == 0.0
+    assert plain.margin == rounding_margin(S.shape[0])

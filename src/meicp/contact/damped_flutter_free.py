@@ -40,7 +40,7 @@ from ..lattice.assembly import damping_matrix_scipy
 from .damped_proportional import bonded_pairs
 from .damped_rayleigh import diagonal_mass, friction_discs
 from .problem import pencil_of
-from .rayleigh import rayleigh_bound
+from .rayleigh import pencil_bound
 
 #: every bound's relative allowance for the rounding of the products and sums that form it
 ROUNDING = 1e-9
@@ -138,7 +138,7 @@ def damped_flutter_free(pen) -> tuple[bool, str]:
     if not math.isfinite(g):
         return False, (f"damped flutter-free proof not possible: {bounds.describe()}; Re xᴴDx/xᴴBx ≥ α + c·g − "
                        f"{bounds.nu + bounds.eps:.3g} stays too small for any g")
-    proof = rayleigh_bound(pen.A, pen.B, -g, decisive=False)
+    proof = pencil_bound(pen, -g)
     if not proof.proved:
         return False, (f"damped flutter-free proof failed: it needs sym(A) + g·B ≺ 0 with g = {g:.6g} "
                        f"({bounds.describe()}), and {proof.reason}")
@@ -147,18 +147,19 @@ def damped_flutter_free(pen) -> tuple[bool, str]:
                   "λ² + dλ − a = 0 has both roots in Re λ < 0 (Hurwitz)")
 
 
-def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4) -> tuple[float, str]:
+def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4, comm=None) -> tuple[float, str]:
     """``(m, statement)``: the largest m ≤ ``upper`` (to ``rel``) such that no eigenvalue of
     the damped sliding pencil of ``maps`` grows at any μ in [0, m] (every contact at μ); 0 when
     nothing is proved.  At μ ≤ m every bound is at most its value at m (β, ν₊, δ₊ and ε grow
     with μ; B does not depend on it), so g = g(m) serves every μ in [0, m], and
     ``sym(A(μ)) + g·B`` is affine in μ: negative definite at 0 and at m (two inertias), it is
     so on [0, m].  Bisection on m.  ``lattice``: the SciPy
-    :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction; every rank alike."""
+    :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction, every rank alike;
+    its inertias factored over ``comm`` (None: this process alone)."""
     pieces = DampingSplit(lattice)
 
     def negative(pen, g: float) -> bool:
-        return pen.A is None or rayleigh_bound(pen.A, pen.B, -g, decisive=False).proved
+        return pen.A is None or pencil_bound(pen, -g, comm).proved
 
     with pencil_of(lattice, lines, (), maps=maps.with_friction(0.0)) as at_zero:
         def proved(m: float) -> bool:

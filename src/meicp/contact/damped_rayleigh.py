@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from ..lattice.assembly import mass_matrix_scipy
 from .maps import reduced_system
 from .problem import pencil_of
-from .rayleigh import rayleigh_bound
+from .rayleigh import pencil_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
 SLACK = 64
@@ -83,19 +83,20 @@ def friction_discs(maps, C: sp.spmatrix, b: np.ndarray) -> tuple[float, float]:
     return out[0], out[1]
 
 
-def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e-4) -> float:
+def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e-4, comm=None) -> float:
     """The largest m ≤ ``upper`` (to ``rel``) with no damped divergence mode, any λ ≥ 0, at any
     μ in [0, m], every contact at the same μ, for one grazing ``case``; 0 when nothing is
     proved.  ``f(μ) = sym(A(μ)) + (ν(μ)²/4)·B`` is convex in μ — A(μ) affine, ν(μ) = μ·ν₁ + s
     (the friction rows' part scales with μ, the slack does not) and B ⪰ 0 — so f(0) ≺ 0 and
     f(m) ≺ 0 (the bound at both ends) give f ≺ 0 on [0, m].  Bisection on m.  SciPy lattices
-    (the critical friction's); every rank alike."""
+    (the critical friction's), every rank alike; the inertias factored over ``comm`` (None:
+    this process alone: at 10⁶ DOFs 16.5 s a step, docs/benchmarks-notes.md, "floor inertias")."""
     red = reduced_system(lattice.model, lines, case)
     C, M = lattice.damping(), mass_matrix_scipy(lattice.model)  # μ changes neither: assembled once
 
     def proved(mu: float) -> bool:
         pen = pencil_of(lattice, lines, case, maps=red.with_friction(mu))
-        return pen.A is None or damped_rayleigh_bound(pen, C, M)[0]
+        return pen.A is None or damped_rayleigh_bound(pen, C, M, comm=comm)[0]
 
     if not np.isfinite(upper) or not proved(0.0):
         return 0.0
@@ -113,11 +114,13 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
     return lo
 
 
-def damped_rayleigh_bound(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = None) -> tuple[bool, str]:
+def damped_rayleigh_bound(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | None = None, *,
+                          comm=None) -> tuple[bool, str]:
     """``(proved, statement)``: whether no real λ ≥ 0 solves the damped pencil's quadratic
     MEiCP, by the bound of the module docstring; the statement says what was shown or why
     it proves nothing.  ``C``, ``M``: the lattice's damping and mass (SciPy) when the caller
-    has them, else assembled here.  Collective on the pencil's communicator."""
+    has them, else assembled here.  Collective on the pencil's communicator; a SciPy pencil
+    every rank holds is factored over ``comm`` (None: this process alone)."""
     lattice = pen.lattice
     C = lattice.damping() if C is None else C
     M = mass_matrix_scipy(lattice.model) if M is None else M
@@ -125,7 +128,7 @@ def damped_rayleigh_bound(pen, C: sp.spmatrix | None = None, M: sp.spmatrix | No
     if nu is None:
         return False, f"damped Rayleigh bound not tried: {why}"
     tau = -0.25 * nu * nu
-    bound = rayleigh_bound(pen.A, pen.B, tau, decisive=False)
+    bound = pencil_bound(pen, tau, comm)
     if bound.proved:
         return True, (f"damped Rayleigh bound: {why}, and {bound.reason}, so λ²·xᵀBx + λ·xᵀDx − xᵀAx > 0 for every "
                       "λ ≥ 0 and x ≠ 0: no real λ ≥ 0 (a proof)")

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..lattice.node_blocks import node_of
 from ..petsc.inertia import (diagonal_minimum, is_symmetric_matrix, nonnegative_count, order, rounding_margin,
                              shifted_symmetric_parts, symmetric_part_of)
 
@@ -57,19 +58,27 @@ def pencil_is_negative(A, B, *, symmetric: bool = False) -> SignProof | None:
     return negative_with_margin(A, B, "A")
 
 
-def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True) -> SignProof:
+def rayleigh_bound(A, B, tau: float = 0.0, *, decisive: bool = True, comm=None, groups=None) -> SignProof:
     """Whether ``sym(A) − τ·sym(B) ≺ 0`` with ``sym(B) ≻ 0``, both with a margin above rounding.
 
     Proved: no MEiCP solution has σ ≥ τ (τ = 0: no divergence mode at all).  Holds for a
     nonsymmetric pencil, a non-diagonal B included (a one-row layer between two frictional
-    interfaces).  A, B: SciPy or
-    PETSc (collective).  ``decisive=False`` spares the second factorisation that tells a
+    interfaces).  A, B: SciPy or PETSc (collective).  ``decisive=False`` spares the second factorisation that tells a
     borderline case (None) from a clear failure (False): a caller that only acts on
     ``proved is True`` gets False for both, with ``above`` the eigenvalues not proved below
-    the margin."""
+    the margin.  ``comm``: SciPy matrices every rank holds are factored over it (None: this
+    process alone); ``groups``: their rows' lattice nodes, to factor them by node
+    (:func:`~meicp.petsc.inertia.nonnegative_count`)."""
     with shifted_symmetric_parts(A, B, tau) as (SA, SB):
         name = "sym(A)" if tau == 0.0 else f"sym(A) {'−' if tau > 0 else '+'} {abs(tau):.6g}·sym(B)"
-        return negative_with_margin(SA, SB, name, decisive)
+        return negative_with_margin(SA, SB, name, decisive, comm, groups)
+
+
+def pencil_bound(pen, tau: float, comm=None) -> SignProof:
+    """:func:`rayleigh_bound` of a :class:`~meicp.contact.problem.Pencil` at ``tau``, not
+    decisive; a SciPy pencil every rank holds is factored over ``comm``, node by node."""
+    groups = None if pen.distributed else node_of(pen.maps.retained)
+    return rayleigh_bound(pen.A, pen.B, tau, decisive=False, comm=comm, groups=groups)
 
 
 def symmetric_part_definite(B) -> tuple[bool, str]:
@@ -79,20 +88,21 @@ def symmetric_part_definite(B) -> tuple[bool, str]:
         return positive_definite(SB)
 
 
-def negative_with_margin(A, B, name: str, decisive: bool = True) -> SignProof:
-    """:class:`SignProof` of the symmetric pencil (A, B), ``name`` naming A in its reason."""
-    b_ok, b_text = positive_definite(B)
+def negative_with_margin(A, B, name: str, decisive: bool = True, comm=None, groups=None) -> SignProof:
+    """:class:`SignProof` of the symmetric pencil (A, B), ``name`` naming A in its reason;
+    ``comm``, ``groups`` as in :func:`rayleigh_bound`."""
+    b_ok, b_text = positive_definite(B, comm)
     if not b_ok:
         return SignProof(False, b_text, 0.0, b_definite=False)
     eta = rounding_margin(order(A))
-    above = nonnegative_count(A, eta)          # eigenvalues of D^-½ A D^-½ ≥ −η
+    above = nonnegative_count(A, eta, comm, groups)  # eigenvalues of D^-½ A D^-½ ≥ −η
     if above == 0:
         return SignProof(True, f"{name} + η·diag|·| is negative definite (η = {eta:.1e}, above rounding) and "
                                f"{b_text}", eta)
     if not decisive:
         return SignProof(False, f"{name} + η·diag|·| is not negative definite ({above} eigenvalue(s) of the diagonally "
                                 f"scaled {name} ≥ −η, η = {eta:.1e}): the bound excludes nothing", eta, above)
-    clearly = nonnegative_count(A, -eta)       # ... ≥ +η
+    clearly = nonnegative_count(A, -eta, comm, groups)  # ... ≥ +η
     if clearly == 0:
         return SignProof(None, f"{above} eigenvalue(s) of {name} lie within rounding of 0 ({name} − η·diag|·| is "
                                f"negative definite, {name} + η·diag|·| is not; η = {eta:.1e}): undecided", eta)
@@ -100,7 +110,7 @@ def negative_with_margin(A, B, name: str, decisive: bool = True) -> SignProof:
                             f"negative definite, η = {eta:.1e}): the bound excludes nothing", eta, clearly)
 
 
-def positive_definite(B) -> tuple[bool, str]:
+def positive_definite(B, comm=None) -> tuple[bool, str]:
     """Whether B ≻ 0: exactly for a diagonal B (every mass positive), else by the inertia of
     ``B − η·diag|B|``."""
     diagonal, smallest = diagonal_minimum(B)
@@ -110,6 +120,6 @@ def positive_definite(B) -> tuple[bool, str]:
         return False, f"B is diagonal with an entry {smallest:.3g} ≤ 0: the Rayleigh-quotient bound does not apply"
     n = order(B)
     eta = rounding_margin(n)
-    if n - nonnegative_count(B, -eta) == 0:  # every pivot of B − η·diag|B| positive
+    if n - nonnegative_count(B, -eta, comm) == 0:  # every pivot of B − η·diag|B| positive
         return True, f"B − η·diag|B| is positive definite (η = {eta:.1e})"
     return False, "B is not proved positive definite: the Rayleigh-quotient bound does not apply"

@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from ..core.comm import mpi_comm
 from ..core.matrix import is_petsc_mat
 from ..core.validation import is_symmetric
+from ..lattice.node_blocks import NodeBlocks
 from . import import_petsc
 from .mat import destroying, mat_from_scipy, symmetric_part
 from .options import INERTIA, OptionsScope, require_mumps_factor
@@ -109,9 +110,14 @@ def is_symmetric_matrix(M) -> bool:
     return is_symmetric(M, 1e-12)
 
 
-def nonnegative_count(A, eta: float) -> int:
+def nonnegative_count(A, eta: float, comm=None, groups=None) -> int:
     """Eigenvalues ≥ 0 (zero and positive pivots) of ``A + eta·D``, ``D = diag(|a_ii|)``
-    (a zero diagonal entry shifted by eta times its row's largest entry)."""
+    (a zero diagonal entry shifted by eta times its row's largest entry).  A SciPy A (every
+    rank holding it) is factored over ``comm`` (None: this process alone; collective), padded
+    with explicit zeros to whole ``groups`` (the lattice node of each row,
+    :class:`~meicp.lattice.node_blocks.NodeBlocks`) when given: SciPy's products drop the
+    zeros of a node block, and the LDLᵀ of a 10⁶-DOF pencil took 21–26 s without them,
+    12–16 s with them (docs/benchmarks-notes.md, "floor inertias")."""
     if is_petsc_mat(A):
         C = A.duplicate(copy=True)
         d = C.getDiagonal()
@@ -124,7 +130,8 @@ def nonnegative_count(A, eta: float) -> int:
     else:
         A = sp.csr_matrix(A)
         rowmax = abs(A).max(axis=1).toarray().ravel()
-        C = mat_from_scipy(None, (A + sp.diags(eta * _diagonal_scale(A.diagonal(), rowmax))).tocsr())
+        C = (A + sp.diags(eta * _diagonal_scale(A.diagonal(), rowmax))).tocsr()
+        C = mat_from_scipy(comm, C if groups is None else NodeBlocks(groups).pad(C))
     try:
         _, zero, positive = inertia(C)
     finally:

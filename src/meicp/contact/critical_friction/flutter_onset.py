@@ -389,7 +389,7 @@ def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, op
             upper, mode = mid, found
         else:
             below = mid  # no certified mode there: not a proof of anything, only where to look
-    lower, proof = _flutter_free_below(lattice, branches, upper if np.isfinite(upper) else mu_max)
+    lower, proof = _flutter_free_below(lattice, branches, upper if np.isfinite(upper) else mu_max, comm)
     text = (f"{_order_text(branches)}: the search proves flutter, never its absence, so "
             + (proof + "; " if lower > 0 else "nothing is proved below the upper end (lower end 0, not exact); ")
             + f"searched at μ = {', '.join(f'{m:.6g}' for m in tried)}")
@@ -403,14 +403,14 @@ def search_onset(lattice, branches, scene, comm, start: float, mu_max: float, op
                  text, mode)
 
 
-def _flutter_free_below(lattice, branches, upper: float) -> tuple[float, str]:
+def _flutter_free_below(lattice, branches, upper: float, comm=None) -> tuple[float, str]:
     """The lower end past the dense limit of a damped lattice: the largest m ≤ ``upper`` with
     every branch's damped sliding pencil proved free of growing eigenvalues on [0, m]
     (:func:`~meicp.contact.damped_flutter_free.flutter_free_up_to`), and what it proved; 0
     undamped (no such proof there: regular lattices flutter at tiny μ)."""
     if not _damped([b.family for b in branches]) or not np.isfinite(upper) or upper <= 0:
         return 0.0, ""
-    ends = [flutter_free_up_to(lattice, b.lines, b.family.maps, upper) for b in branches]
+    ends = [flutter_free_up_to(lattice, b.lines, b.family.maps, upper, comm=comm) for b in branches]
     lower = min(m for m, _ in ends)
     return lower, "; ".join(text for _, text in ends)
 

@@ -234,7 +234,7 @@ def _case_floor(lattice, lines, case, top: float, comm) -> tuple[float, str]:
     grazing case at any μ in [0, m], m ≤ top; with damping 0 the bound and the windows are the
     undamped ones."""
     # to 1 %: the λ-windows over μ carry it on from there
-    floor = divergence_free_up_to(lattice, lines, case, top, rel=1e-2)
+    floor = divergence_free_up_to(lattice, lines, case, top, rel=1e-2, comm=comm)
     log.info("critical_friction: no divergence mode of any λ ≥ 0 for μ in [0, %.6g] (Rayleigh bound along μ)",
              floor)
     bound = "damped Rayleigh bound" if lattice.model.damped else "Rayleigh bound (sym A(μ) ≺ 0)"

@@ -82,7 +82,7 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     A, B = pen.A, pen.B
     started = time.perf_counter()
     top = probe_top(A, B, procedures.estimate_top)
-    verdict, why = steps.bound_at_zero(A, B, top, started)
+    verdict, why = steps.bound_at_zero(pen, top, started)
     if verdict is not None:
         return verdict
     reasons = [why]

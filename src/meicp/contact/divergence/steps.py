@@ -9,7 +9,7 @@ import math
 import time
 
 from ..friction_range import proved_friction_range
-from ..rayleigh import rayleigh_bound
+from ..rayleigh import pencil_bound, rayleigh_bound
 from .search import SearchOutcome
 from .sigma_window import TopEstimate
 from .verdict import DivergenceProof, DivergenceVerdict
@@ -23,7 +23,7 @@ def _window_proof(test: str, statement: str, sigma_window, outcome: SearchOutcom
                            eigen_solves=tally[1], **more)
 
 
-def bound_at_zero(A, B, top: TopEstimate, started: float) -> tuple[DivergenceVerdict | None, str]:
+def bound_at_zero(pen, top: TopEstimate, started: float) -> tuple[DivergenceVerdict | None, str]:
     """1. The Rayleigh bound at 0 — ``sym(A) ≺ 0`` with ``sym(B) ≻ 0`` proves that no σ ≥ 0
     exists (one factorisation; any pencil, interfaces included) — unless the short run's
     Ritz value θ > 0 already rules it out (θ is a Rayleigh quotient).  Returns the proof's
@@ -31,7 +31,7 @@ def bound_at_zero(A, B, top: TopEstimate, started: float) -> tuple[DivergenceVer
     if top.positive:
         return None, (f"Rayleigh bound at 0: not tried, the Ritz value θ = {top.theta:.6g} > 0 of (sym A, sym B) is a "
                       "Rayleigh quotient: sym(A) is not negative definite")
-    at_zero = rayleigh_bound(A, B, 0.0, decisive=False)
+    at_zero = pencil_bound(pen, 0.0)
     log.info("divergence: Rayleigh bound at 0 %s (%.2f s)", "proved" if at_zero.proved else "not proved",
              time.perf_counter() - started)
     if not at_zero.proved:
