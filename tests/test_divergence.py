@@ -404,3 +404,20 @@ def test_a_pencil_with_no_stiffness_past_the_enumeration_is_undecided_not_a_cras
     assert meicp.analyze(scene, flutter=False).divergence is True  # σ = 0, enumerated
     monkeypatch.setattr(limits, "ENUMERATE_N", 0)
     assert meicp.analyze(scene, flutter=False).divergence is not False
+
+
+def test_a_slow_mode_missed_at_the_first_shift_is_searched_for_below_it(monkeypatch):
+    """Where the first search finds nothing at its shift and the condensed proof cannot exclude
+    σ = 0 itself, short searches from shifts below the first one come before the whole search
+    from the window's top, which reaches a mode just above 0 last: on the scaling family at
+    10⁶ DOFs (σ = 4.1e-5, the proxy's shift 0.0092) that whole search ran past 10 minutes where
+    the first shift below found the mode in 5 restarts.  Here the first shift is pushed 40×
+    too high to miss the mode of a 10⁴-DOF lattice the same way."""
+    scene = two_layer_scene(100, (25, 25), mu=2.0, states="slip+")
+    expected = meicp.analyze(scene, None, method="active-set", flutter=False)
+    monkeypatch.setattr(search, "PROXY_SHIFT", 40 * search.PROXY_SHIFT)
+    r = meicp.analyze(scene, None, method="active-set", flutter=False)
+    first = search.PROXY_SHIFT * proxy.rightmost_real(scene, contact_lines(scene, LatticeModel(scene)))
+    assert r.divergence is True and [m.sigma for m in r.modes][:1] == pytest.approx([expected.modes[0].sigma])
+    shift = float(r.evidence.split("search from σ = ")[1].split(":")[0])
+    assert shift == pytest.approx(search.LOWER_SHIFTS[0] * first, rel=1e-5)

@@ -13,7 +13,10 @@ window procedure, cheapest first, one step each (:mod:`.steps`):
    (docs/benchmarks-notes.md, "first search only above 0"), so the proof comes first and the
    whole search after it; and not when the proxy has no real σ above 0 (it found nothing from
    the top on every scene measured: "no first search without a proxy mode").
-3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).
+3. **Condensed proof** on [0, ∞) (:func:`.condensed.prove_no_divergence`).  Where it cannot
+   exclude σ = 0 itself and the first search found nothing, short searches from shifts below
+   the first one (:func:`.search.searches_below`): a mode just above 0 sits among the slow
+   vibrations seen from the top, where the whole search reaches it last.
 4. **σ-window**, only where that proof stopped at some σ = c: a certified σ_max
    (:mod:`.sigma_window`); ``σ_max ≤ c`` completes the proof, else the search goes on from σ_max.
 5. **Whole search** with its whole budget; then, only if the caller or the scene asked
@@ -30,6 +33,7 @@ nothing and costs more than the proof (docs/benchmarks-notes.md, "search before 
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -93,6 +97,13 @@ def window_verdict(pen: Pencil, scene: Scene, comm, lam_min: float, tol: float, 
     condensed = steps.condensed_proof(pen, comm, tol, procedures.prove, started)
     if condensed.proved:
         return steps.proved_by_condensation(condensed, first)
+    if first is not None and not first.found and steps.covered_by_condensation(condensed) == -math.inf:
+        # σ = 0 itself not excluded and nothing at the first shift: a slow mode just above 0,
+        # which the whole search from the top reaches last (docs/benchmarks-notes.md, "slow mode")
+        first, shifts = searches_below(settings.from_shift(first.target), first)
+        if first.found:
+            return steps.mode_found(first, None)
+        reasons.append(f"short searches from σ = {', '.join(f'{s:.3g}' for s in shifts)} found no mode")
     sigma_max, top = certified_sigma_max(A, B, top, procedures.estimate_top)
     log.info("divergence: σ-window [0, %s] (%.2f s)", "?" if sigma_max is None else f"{sigma_max:.6g}",
              time.perf_counter() - started)
