@@ -13,6 +13,7 @@ from meicp.contact.critical_friction.flutter_onset import sliding_families
 from meicp.contact.critical_friction.solve import _friction_states
 from meicp.contact import damped_rayleigh
 from meicp.contact.damped_cover import QuadraticFamily, damped_cover_step
+from meicp.contact.maps import reduced_system
 from meicp.core import limits
 from meicp.eicp.quadratic import quadratic_spectrum
 from meicp.examples import two_layer_scene
@@ -205,3 +206,28 @@ def test_the_rayleigh_floor_ends_when_nothing_above_0_is_proved(monkeypatch):
     assert damped_rayleigh.divergence_free_up_to(lattice, lines, (), 5.0) == 0.0
     # 0, the upper end, then 5 / 8^k down to 1e-6·5: 7 steps
     assert tried[0] == 0.0 and len(tried) == 2 + 7 and tried[-1] <= 5.0 * damped_rayleigh.SMALLEST
+
+
+def test_the_damped_flutter_free_bisection_ends_when_nothing_above_0_is_proved(monkeypatch):
+    """The twin of the Rayleigh floor's loop: the damped flutter-free proof along μ, proved at
+    0 and nowhere above, ends with 0 after the same descent (its plain halving from lo = 0 ran
+    until hi underflowed: about a thousand inertias)."""
+    from types import SimpleNamespace
+
+    from meicp.contact import damped_flutter_free
+
+    scene = damped(two_layer_scene(6, (2, 2), mu=1.0, states="slip+"), eta=[0.02, 0.02])
+    lattice, lines = _friction_states(scene)
+    maps = reduced_system(lattice.model, lines, ())
+    tried = []
+
+    def only_at_zero(pen, tau, comm=None):
+        mu = float(np.max(np.abs(pen.maps.friction_rows().data), initial=0.0))
+        tried.append(mu)
+        return SimpleNamespace(proved=mu == 0.0)
+
+    monkeypatch.setattr(damped_flutter_free, "pencil_bound", only_at_zero)
+    lo, _ = damped_flutter_free.flutter_free_up_to(lattice, lines, maps, 5.0)
+    above = [mu for mu in tried if mu > 0]
+    # the upper end, then 5 / 8^k down to 1e-6·5: 7 steps
+    assert lo == 0.0 and len(above) == 1 + 7 and min(above) <= 5.0 * damped_rayleigh.SMALLEST

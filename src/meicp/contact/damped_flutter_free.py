@@ -38,7 +38,7 @@ import scipy.sparse as sp
 
 from ..lattice.assembly import damping_matrix_scipy
 from .damped_proportional import bonded_pairs
-from .damped_rayleigh import diagonal_mass, friction_discs
+from .damped_rayleigh import diagonal_mass, friction_discs, largest_proved
 from .problem import pencil_of
 from .rayleigh import pencil_bound
 
@@ -153,7 +153,7 @@ def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4,
     nothing is proved.  At μ ≤ m every bound is at most its value at m (β, ν₊, δ₊ and ε grow
     with μ; B does not depend on it), so g = g(m) serves every μ in [0, m], and
     ``sym(A(μ)) + g·B`` is affine in μ: negative definite at 0 and at m (two inertias), it is
-    so on [0, m].  Bisection on m.  ``lattice``: the SciPy
+    so on [0, m].  Bisection on m (:func:`~.damped_rayleigh.largest_proved`).  ``lattice``: the SciPy
     :class:`~meicp.petsc.assembly.LatticeMatrices` of the critical friction, every rank alike;
     its inertias factored over ``comm`` (None: this process alone)."""
     pieces = DampingSplit(lattice)
@@ -174,12 +174,7 @@ def flutter_free_up_to(lattice, lines, maps, upper: float, *, rel: float = 1e-4,
 
         if not math.isfinite(upper) or upper <= 0 or not proved(0.0):
             return 0.0, "the damped flutter-free proof does not hold at μ = 0"
-        lo, hi = 0.0, upper
-        if proved(hi):
-            lo = hi
-        while hi - lo > rel * hi:
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if proved(mid) else (lo, mid)
+        lo = largest_proved(proved, upper, rel)
     return lo, (f"no eigenvalue of the damped sliding pencil grows for any μ in [0, {lo:.8g}] (the damped flutter-free "
                 "proof with the bounds at its upper end, sym(A(μ)) + g·B ≺ 0 at both ends, affine in μ: a proof)")
 

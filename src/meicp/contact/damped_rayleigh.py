@@ -29,8 +29,8 @@ from .rayleigh import pencil_bound
 
 #: the rounding slack on Q̃ᵀCQ̃ ⪰ 0, in units of eps·‖Q̃‖₁‖Q̃‖_∞‖C‖₁/min(b)
 SLACK = 64
-#: divergence_free_up_to: while nothing above 0 is proved, each step divides its upper end
-#: by DESCENT, down to SMALLEST·upper (then 0 is returned: 7 steps)
+#: largest_proved: while nothing above 0 is proved, each step divides its upper end by
+#: DESCENT, down to SMALLEST·upper (then 0 is returned: 7 steps)
 DESCENT = 8
 SMALLEST = 1e-6
 
@@ -100,12 +100,17 @@ def divergence_free_up_to(lattice, lines, case, upper: float, *, rel: float = 1e
 
     if not np.isfinite(upper) or not proved(0.0):
         return 0.0
+    return largest_proved(proved, upper, rel)
+
+
+def largest_proved(proved, upper: float, rel: float) -> float:
+    """The largest m ≤ ``upper`` (to ``rel``) with ``proved(m)`` found by bisection, given
+    ``proved(0)``; 0 when nothing above SMALLEST·upper is.  While nothing above 0 is proved it
+    steps down by DESCENT (halving from lo = 0, hi − lo > rel·hi held forever: a grazing case
+    looped here; at 10⁶ DOFs each step is a pencil and an LDLᵀ), then bisects."""
     if proved(upper):
         return upper
     lo, hi = 0.0, upper
-    # while nothing above 0 is proved, down by DESCENT at a time and not below SMALLEST·upper
-    # (halving from lo = 0, hi − lo > rel·hi held forever: a grazing case looped here; at 10⁶
-    # DOFs each step is a pencil and an LDLᵀ), then bisection
     while hi - lo > rel * hi:
         if lo == 0.0 and hi <= SMALLEST * upper:
             break
